@@ -1,0 +1,235 @@
+"""The client commands of ``mpm``: submit, jobs, status, cancel, download.
+
+Each command is registered by a ``register_*(subparsers)`` function, listed in the
+``mpm.commands`` entry-point group; :func:`main` adds these and then every other
+command of that group (the server package's run, validate, serve, ...), so the
+``mpm`` script of either package offers all installed commands.
+"""
+from __future__ import annotations
+
+import argparse
+import functools
+import json
+import sys
+from datetime import datetime, timezone
+from importlib.metadata import entry_points
+from itertools import islice
+from typing import Callable
+
+from .client import Client, Job
+from .errors import MpmError
+from .models import STATUSES
+from .progress import format_duration, format_progress
+
+Handler = Callable[[argparse.Namespace], int]
+
+
+def _connection_options() -> argparse.ArgumentParser:
+    """The options every client command takes (a parent parser)."""
+    parent = argparse.ArgumentParser(add_help=False)
+    group = parent.add_argument_group("service")
+    group.add_argument("--server", metavar="URL", default=None,
+                       help="service URL (default: $MPM_SERVER, else http://127.0.0.1:8000)")
+    group.add_argument("--token", default=None, help="API token (default: $MPM_TOKEN)")
+    return parent
+
+
+def _client(args: argparse.Namespace) -> Client:
+    return Client(args.server, token=args.token)
+
+
+def _reports_errors(handler: Handler) -> Handler:
+    """Turn SDK errors into a message on stderr and exit status 1 (130 on Ctrl-C)."""
+
+    command = handler.__name__.strip("_")
+
+    @functools.wraps(handler)
+    def run(args: argparse.Namespace) -> int:
+        try:
+            return handler(args)
+        except (MpmError, OSError, ValueError, TypeError) as exc:
+            print(f"mpm {command}: error: {exc}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print(f"mpm {command}: interrupted", file=sys.stderr)
+            return 130
+
+    return run
+
+
+# -- submit ------------------------------------------------------------------------
+
+
+def register_submit(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "submit", parents=[_connection_options()], help="submit a scene to the service",
+        description="Submit a scene to the service; prints the job id on stdout.")
+    parser.add_argument("scene", metavar="SCENE", help="scene file (JSON)")
+    parser.add_argument("-n", "--processes", type=int, default=None, help="processes to ask for")
+    parser.add_argument("--wait", action="store_true", help="wait for the job to finish, with a progress bar")
+    parser.add_argument("--download", metavar="FILE", default=None,
+                        help="wait, then download result.h5 to FILE")
+    parser.add_argument("--timeout", type=float, default=None, help="give up waiting after this many seconds")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=_submit)
+
+
+@_reports_errors
+def _submit(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        job = client.submit(args.scene, processes=args.processes)
+        print(job.id, flush=True)
+        if not (args.wait or args.download):
+            return 0
+        job.wait(timeout=args.timeout, progress=not args.quiet)
+        if args.download:
+            path = job.download(args.download)
+            print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+# -- jobs --------------------------------------------------------------------------
+
+
+def register_jobs(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "jobs", parents=[_connection_options()], help="list your jobs, newest first")
+    parser.add_argument("--status", choices=STATUSES, default=None, help="only jobs in this state")
+    parser.add_argument("--limit", type=int, default=20, help="at most this many jobs (0: all; default 20)")
+    parser.add_argument("--json", action="store_true", help="one JSON job record a line")
+    parser.set_defaults(func=_jobs)
+
+
+@_reports_errors
+def _jobs(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        page_size = args.limit if 0 < args.limit <= 100 else None
+        jobs = list(islice(client.jobs(status=args.status, limit=page_size), args.limit or None))
+        if args.json:
+            for job in jobs:
+                print(job.record.model_dump_json())
+            return 0
+        print(_table(jobs))
+    return 0
+
+
+def _table(jobs: list[Job]) -> str:
+    header = ("ID", "NAME", "STATUS", "PROGRESS", "SIM TIME", "AGE")
+    rows = [header] + [
+        (job.id, job.record.name or "", job.record.status, f"{job.record.progress * 100:.0f}%",
+         f"{job.record.sim_time:.4g}", _age(job.record.created_at))
+        for job in jobs
+    ]
+    widths = [max(len(row[i]) for row in rows) for i in range(len(header))]
+    return "\n".join("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in rows)
+
+
+def _age(created: datetime | None) -> str:
+    if created is None:
+        return ""
+    if created.tzinfo is None:
+        created = created.replace(tzinfo=timezone.utc)
+    return format_duration((datetime.now(timezone.utc) - created).total_seconds())
+
+
+# -- status ------------------------------------------------------------------------
+
+
+def register_status(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("status", parents=[_connection_options()], help="show one job")
+    parser.add_argument("job_id", metavar="ID")
+    parser.add_argument("--json", action="store_true", help="the whole job record as JSON")
+    parser.set_defaults(func=_status)
+
+
+@_reports_errors
+def _status(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        record = client.job(args.job_id).record
+    if args.json:
+        print(json.dumps(record.model_dump(mode="json"), indent=2))
+        return 0
+    lines = [
+        ("id", record.id), ("name", record.name or ""), ("status", record.status),
+        ("progress", format_progress(record)), ("step", str(record.step)),
+        ("created", str(record.created_at or "")), ("finished", str(record.finished_at or "")),
+    ]
+    if record.error:
+        lines.append(("error", record.error))
+    for key, value in lines:
+        print(f"{key:>9}: {value}")
+    return 0
+
+
+# -- cancel ------------------------------------------------------------------------
+
+
+def register_cancel(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("cancel", parents=[_connection_options()], help="stop a job")
+    parser.add_argument("job_id", metavar="ID")
+    parser.set_defaults(func=_cancel)
+
+
+@_reports_errors
+def _cancel(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        job = client.job(args.job_id).cancel()
+    print(f"{job.id} {job.record.status}")
+    return 0
+
+
+# -- download ----------------------------------------------------------------------
+
+
+def register_download(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("download", parents=[_connection_options()],
+                                   help="download a job's result.h5")
+    parser.add_argument("job_id", metavar="ID")
+    parser.add_argument("file", metavar="FILE", help="where to write the HDF5 file")
+    parser.set_defaults(func=_download)
+
+
+@_reports_errors
+def _download(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        path = client.job(args.job_id).download(args.file)
+    print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+# -- the mpm command ---------------------------------------------------------------
+
+CLIENT_COMMANDS = (register_submit, register_jobs, register_status, register_cancel, register_download)
+
+
+def add_plugin_commands(subparsers: argparse._SubParsersAction) -> None:
+    """Add every ``mpm.commands`` entry point not already present; warn about those that fail to load."""
+    for entry in sorted(entry_points(group="mpm.commands"), key=lambda e: e.name):
+        if entry.name in subparsers.choices:
+            continue
+        try:
+            entry.load()(subparsers)
+        except Exception as exc:  # a broken or half-installed package must not take mpm down
+            print(f"mpm: warning: command {entry.name!r} ({entry.value}) is unavailable: {exc}", file=sys.stderr)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="mpm", description="MPM simulations: run locally or through the service.")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for register in CLIENT_COMMANDS:
+        register(subparsers)
+    add_plugin_commands(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "func", None) is None:
+        parser.print_help()
+        return 2
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

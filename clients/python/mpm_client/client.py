@@ -1,0 +1,207 @@
+"""The synchronous SDK: :class:`Client` and :class:`Job`."""
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+from typing import Any, Iterator
+
+import httpx
+
+from . import _api
+from .errors import WaitTimeout
+from .models import ExampleInfo, JobRecord, Summary
+from .progress import ProgressBar
+from .scenes import SceneLike
+
+
+class Client:
+    """A connection to the MPM service.
+
+    ``base_url`` defaults to ``$MPM_SERVER`` (else ``http://127.0.0.1:8000``) and
+    ``token`` to ``$MPM_TOKEN``. Connection errors and 502/503/504 answers are
+    retried ``retries`` times with exponential backoff; 4xx answers never are.
+    ``transport`` is handed to httpx (tests pass an ``httpx.MockTransport``).
+    """
+
+    def __init__(self, base_url: str | None = None, token: str | None = None, *,
+                 timeout: float = 30.0, retries: int = 3, backoff: float = 0.25,
+                 transport: httpx.BaseTransport | None = None) -> None:
+        self.base_url = _api.resolve_server(base_url)
+        self.retries = retries
+        self.backoff = backoff
+        self._http = httpx.Client(base_url=self.base_url, headers=_api.headers(_api.resolve_token(token)),
+                                  timeout=timeout, transport=transport)
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._http.close()
+
+    def __repr__(self) -> str:
+        return f"Client({self.base_url!r})"
+
+    # -- the API ---------------------------------------------------------------
+
+    def submit(self, scene: SceneLike, processes: int | None = None) -> "Job":
+        """Validate, store and enqueue a scene (dict, file path, JSON text or solver ``Scene``)."""
+        return self._job(self._send(_api.submit(scene, processes)).json())
+
+    def validate(self, scene: SceneLike) -> Summary:
+        """The summary of a valid scene; raises :class:`ValidationFailed` with every error."""
+        return Summary.model_validate(self._send(_api.validate(scene)).json()["summary"])
+
+    def jobs(self, status: str | None = None, limit: int | None = None) -> Iterator["Job"]:
+        """Every job of this caller, newest first, fetched page by page (``limit`` jobs a page)."""
+        cursor = None
+        while True:
+            page = self._send(_api.list_jobs(status, limit, cursor)).json()
+            for record in page["jobs"]:
+                yield self._job(record)
+            cursor = page.get("next_cursor")
+            if not cursor:
+                return
+
+    def job(self, job_id: str) -> "Job":
+        return self._job(self._send(_api.Call("GET", _api.job_path(job_id))).json())
+
+    def examples(self) -> list[ExampleInfo]:
+        answer = self._send(_api.Call("GET", "/v1/examples")).json()
+        return [ExampleInfo.model_validate(item) for item in answer["examples"]]
+
+    def example(self, name: str) -> dict[str, Any]:
+        """The scene document of a built-in example."""
+        return self._send(_api.example(name)).json()
+
+    # -- plumbing ----------------------------------------------------------------
+
+    def _job(self, record: dict[str, Any]) -> "Job":
+        return Job(self, JobRecord.model_validate(record))
+
+    def _retrier(self, call: _api.Call) -> _api.Retrier:
+        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff)
+
+    def _send(self, call: _api.Call) -> httpx.Response:
+        retrier = self._retrier(call)
+        while True:
+            try:
+                response = self._http.request(call.method, call.path, params=call.params, json=call.json)
+            except httpx.TransportError as exc:
+                delay = retrier.after_error(exc)
+            else:
+                delay = retrier.after_response(response)
+                if delay is None:
+                    return response
+            time.sleep(delay)
+
+    def _download(self, call: _api.Call, path: str | os.PathLike[str]) -> Path:
+        """Stream the answer of ``call`` into ``path``; a broken transfer starts over, never half-writes."""
+        retrier = self._retrier(call)
+        while True:
+            try:
+                with self._http.stream(call.method, call.path, params=call.params) as response:
+                    if response.is_error:
+                        response.read()
+                    delay = retrier.after_response(response)
+                    if delay is None:
+                        with _api.atomic_file(path) as out:
+                            for chunk in response.iter_bytes():
+                                out.write(chunk)
+                        return Path(path)
+            except httpx.TransportError as exc:
+                delay = retrier.after_error(exc)
+            time.sleep(delay)
+
+
+class Job:
+    """A submitted job. ``record`` is the last :class:`JobRecord` fetched (see :meth:`refresh`)."""
+
+    def __init__(self, client: Client, record: JobRecord) -> None:
+        self.client = client
+        self.record = record
+        self._downloaded: Path | None = None
+
+    @property
+    def id(self) -> str:
+        return self.record.id
+
+    def __repr__(self) -> str:
+        return f"Job({self.id!r}, status={self.record.status!r}, progress={self.record.progress:.2f})"
+
+    def refresh(self) -> "Job":
+        """Fetch the job record again."""
+        self.record = self.client.job(self.id).record
+        return self
+
+    def status(self) -> str:
+        """The current status (fetched): queued, running, succeeded, failed or cancelled."""
+        return self.refresh().record.status
+
+    def wait(self, timeout: float | None = None, poll: float = 0.5, progress: bool = True) -> "Job":
+        """Block until the job finishes; returns it when it succeeded.
+
+        Raises :class:`JobFailed` (with the solver's diagnostic) when it failed,
+        :class:`JobCancelled` when it was cancelled, :class:`WaitTimeout` after
+        ``timeout`` seconds (the job keeps running).
+        """
+        bar = ProgressBar() if progress else None
+        deadline = None if timeout is None else time.monotonic() + timeout
+        try:
+            while True:
+                self.refresh()
+                if bar:
+                    bar.update(self.record)
+                if self.record.finished:
+                    return _api.finished(self)
+                if deadline is not None and time.monotonic() >= deadline:
+                    raise WaitTimeout(f"job {self.id} still {self.record.status} after {timeout} s")
+                time.sleep(poll if deadline is None else max(0.0, min(poll, deadline - time.monotonic())))
+        finally:
+            if bar:
+                bar.close()
+
+    def cancel(self) -> "Job":
+        """Ask the service to stop the job; raises :class:`Conflict` if it already finished."""
+        self.client._send(_api.Call("POST", _api.job_path(self.id, "/cancel")))
+        return self.refresh()
+
+    def delete(self) -> None:
+        """Remove a finished job and its files from the service."""
+        self.client._send(_api.Call("DELETE", _api.job_path(self.id)))
+
+    def download(self, path: str | os.PathLike[str]) -> Path:
+        """Stream ``result.h5`` to ``path`` (written atomically); raises :class:`Conflict` while there is none."""
+        self._downloaded = self.client._download(_api.Call("GET", _api.job_path(self.id, "/result.h5")), path)
+        return self._downloaded
+
+    def preview(self, frame: int = -1, field: str | None = None,
+                path: str | os.PathLike[str] | None = None) -> bytes:
+        """The PNG of a frame (the last by default), also written to ``path`` when given."""
+        image = self.client._send(_api.preview(self.id, frame, field)).content
+        if path is not None:
+            with _api.atomic_file(path) as out:
+                out.write(image)
+        return image
+
+    def series(self) -> dict[str, Any]:
+        """The time series (time, dt, kinetic_energy, ...) as numpy arrays (needs numpy)."""
+        return _api.to_arrays(self.client._send(_api.Call("GET", _api.job_path(self.id, "/series"))).json())
+
+    def scene(self) -> dict[str, Any]:
+        """The validated scene the job runs."""
+        return self.client._send(_api.Call("GET", _api.job_path(self.id, "/scene"))).json()
+
+    def open(self, path: str | os.PathLike[str] | None = None) -> Any:
+        """The result as an open ``h5py.File`` (needs h5py); close it when done.
+
+        Uses ``path`` if that file exists, else downloads to it; without ``path``
+        it reuses the last :meth:`download` or downloads into the temp directory.
+        """
+        candidate = Path(path) if path is not None else self._downloaded
+        if candidate is None or not candidate.is_file():
+            candidate = self.download(_api.result_path(self.id, path))
+        return _api.open_h5(candidate)
