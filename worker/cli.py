@@ -1,0 +1,63 @@
+"""`mpm worker`: a Celery worker for the Redis named by MPM_REDIS_URL."""
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import socket
+import sys
+
+from celery.signals import worker_ready, worker_shutdown
+
+from worker.celery_app import QUEUE, make_celery
+from worker.heartbeat import Heartbeat
+from worker.logs import configure_logging
+from worker.settings import get_settings
+from worker.warmup import warm_up
+
+log = logging.getLogger("mpm.worker")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--concurrency", type=int, default=None,
+                        help="jobs run at once (default MPM_WORKER_CONCURRENCY, 1)")
+    parser.add_argument("--name", default=None,
+                        help="worker name, unique among the workers (default mpm-<pid>@<host>)")
+    parser.add_argument("--no-warmup", action="store_true",
+                        help="skip compiling the solver kernels at start")
+
+
+def register_worker(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "worker", help="run a worker for the Redis in MPM_REDIS_URL",
+        description="Run jobs from the queue in MPM_REDIS_URL; start any number, on any machines "
+                    "sharing MPM_DATA_DIR.")
+    add_arguments(parser)
+    parser.set_defaults(func=worker_command)
+
+
+def worker_command(args: argparse.Namespace) -> int:
+    settings = get_settings()
+    configure_logging(settings.log_level)
+    if not settings.redis_url:
+        print("mpm worker: set MPM_REDIS_URL to the Redis of the service "
+              "(`mpm serve` starts its own worker)", file=sys.stderr)
+        return 2
+    name = args.name or f"mpm-{os.getpid()}@{socket.gethostname()}"
+    if settings.warmup and not args.no_warmup:
+        warm_up()
+    app = make_celery(settings)
+
+    from worker.tasks import get_store  # the task module registers the task with `app`
+    heartbeat = Heartbeat(get_store(), name)
+    worker_ready.connect(lambda **_: heartbeat.start(), weak=False)
+    worker_shutdown.connect(lambda **_: heartbeat.stop(), weak=False)
+
+    worker = app.Worker(
+        hostname=name, pool_cls="threads",
+        concurrency=args.concurrency or settings.worker_concurrency,
+        queues=[QUEUE], loglevel=settings.log_level.upper(),
+        without_mingle=True, without_gossip=True, quiet=True)
+    worker.start()
+    log.info("worker stopped", extra={"worker": name})
+    return worker.exitcode or 0

@@ -1,0 +1,55 @@
+"""Job ids and the files of a job. Every path is built from a validated id."""
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+
+
+class InvalidJobId(ValueError):
+    """The text is not a job id (a canonical UUID)."""
+
+
+def new_job_id() -> str:
+    return str(uuid.uuid4())
+
+
+def parse_job_id(text: str) -> str:
+    """The canonical form of a job id, or InvalidJobId: nothing else reaches a path."""
+    try:
+        value = uuid.UUID(text)
+    except (ValueError, TypeError, AttributeError):
+        raise InvalidJobId(f"not a job id: {text!r}") from None
+    if str(value) != text.lower():  # refuse braces, urn: prefixes, missing dashes
+        raise InvalidJobId(f"not a job id: {text!r}")
+    return str(value)
+
+
+class JobFiles:
+    """The folder of one job: `<jobs_dir>/<uuid>/`."""
+
+    def __init__(self, jobs_dir: Path, job_id: str):
+        self.dir = Path(jobs_dir) / parse_job_id(job_id)
+
+    @property
+    def scene(self) -> Path:
+        return self.dir / "scene.json"
+
+    @property
+    def result(self) -> Path:
+        return self.dir / "result.h5"
+
+    @property
+    def xdmf(self) -> Path:
+        return self.dir / "result.xdmf"
+
+    @property
+    def log(self) -> Path:
+        return self.dir / "solver.log"
+
+    @property
+    def previews(self) -> Path:
+        return self.dir / "previews"
+
+    def preview(self, frame: int, field: str) -> Path:
+        """A cached rendering; `field` must already be checked against the known names."""
+        return self.previews / f"frame{frame}_{field}.png"

@@ -1,0 +1,135 @@
+"""Run the solver in a child process: `python -m solver run scene.json -o DIR --progress json`.
+
+The child gets its own process group, so that a stop reaches the whole group
+(`mpiexec` and its ranks too) and a Ctrl-C at the terminal of `mpm serve` does
+not. A stop is SIGTERM (the solver finishes its step and closes the result file
+as partial), then SIGKILL after a grace period. Progress lines are forwarded at
+a bounded rate: the latest one at most every `progress_interval` seconds.
+"""
+from __future__ import annotations
+
+import json
+import os
+import queue
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+# One JSON object per progress line; lines that are not JSON go to the log.
+ProgressLine = dict[str, Any]
+
+
+@dataclass
+class Outcome:
+    returncode: int
+    done: ProgressLine | None  # the solver's last line, {"event": "done", ...Result}
+    stopped: str | None         # why we stopped it ("cancelled", "timeout", "shutdown"), or None
+    log_tail: str               # the end of the solver's stderr, for diagnostics
+
+
+def solver_command(scene: Path, out_dir: Path, processes: int = 1,
+                   progress: str = "json") -> list[str]:
+    command = [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out_dir),
+               "--progress", progress]
+    if processes > 1:
+        command = ["mpiexec", "-n", str(processes), *command]
+    return command
+
+
+def _kill_group(process: subprocess.Popen, sig: int) -> None:
+    try:
+        os.killpg(process.pid, sig)
+    except ProcessLookupError:
+        pass
+
+
+def _read_lines(stream, lines: queue.Queue, log) -> None:
+    for raw in stream:
+        try:
+            item = json.loads(raw)
+        except ValueError:
+            item = None
+        if isinstance(item, dict):
+            lines.put(item)
+        elif raw.strip():
+            log.write(raw)
+            log.flush()
+    lines.put(None)  # end of output
+
+
+def tail(path: Path, chars: int = 2000) -> str:
+    try:
+        with open(path, "rb") as f:
+            f.seek(max(0, f.seek(0, os.SEEK_END) - chars))
+            return f.read().decode(errors="replace").strip()
+    except OSError:
+        return ""
+
+
+def run_solver(command: list[str], log_path: Path, *,
+               on_progress: Callable[[ProgressLine], None],
+               should_stop: Callable[[], str | None],
+               progress_interval: float = 0.5,
+               poll_interval: float = 0.25,
+               grace_seconds: float = 10.0,
+               timeout_seconds: float | None = None) -> Outcome:
+    """Run `command` to its end, or until `should_stop()` names a reason to stop it.
+
+    `should_stop` is polled every `poll_interval` seconds; `on_progress` receives the
+    solver's progress lines, the latest at most every `progress_interval` seconds."""
+    lines: queue.Queue = queue.Queue()
+    done: ProgressLine | None = None
+    pending: ProgressLine | None = None
+    last_sent = 0.0
+    stopped: str | None = None
+    term_sent_at: float | None = None
+    started = time.monotonic()
+    with open(log_path, "a", encoding="utf-8") as log:
+        process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=log, text=True,
+                                   start_new_session=True, cwd=log_path.parent)
+        reader = threading.Thread(target=_read_lines, args=(process.stdout, lines, log), daemon=True)
+        reader.start()
+        output_open = True
+        next_poll = 0.0
+        try:
+            while output_open or process.poll() is None:
+                try:
+                    item = lines.get(timeout=poll_interval)
+                except queue.Empty:
+                    item = False
+                if item is None:
+                    output_open = False
+                elif item:
+                    if item.get("event") == "done":
+                        done = item
+                    else:
+                        pending = item
+                now = time.monotonic()
+                if pending is not None and now - last_sent >= progress_interval:
+                    on_progress(pending)
+                    pending, last_sent = None, now
+                if now >= next_poll:
+                    next_poll = now + poll_interval
+                    if stopped is None:
+                        stopped = should_stop()
+                        if stopped is None and timeout_seconds and now - started > timeout_seconds:
+                            stopped = "timeout"
+                        if stopped is not None:
+                            _kill_group(process, signal.SIGTERM)
+                            term_sent_at = now
+                    elif term_sent_at is not None and now - term_sent_at > grace_seconds:
+                        _kill_group(process, signal.SIGKILL)
+                        term_sent_at = None
+        finally:
+            if process.poll() is None:  # an exception above: leave no solver behind
+                _kill_group(process, signal.SIGKILL)
+            process.wait()
+            reader.join(timeout=5)
+    if pending is not None:
+        on_progress(pending)
+    return Outcome(process.returncode, done, stopped, tail(log_path))

@@ -1,0 +1,71 @@
+"""Settings of the service and its workers, read from the environment (`MPM_*`).
+
+Both the API and the workers read the same settings, so they live here, in the
+lower of the two packages (the service imports the worker, never the reverse).
+"""
+from __future__ import annotations
+
+import os
+import sys
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+
+def default_data_dir() -> Path:
+    """The platform's per-user data folder, with an `mpm` folder in it."""
+    home = Path.home()
+    if sys.platform == "win32":
+        base = Path(os.environ.get("LOCALAPPDATA") or home / "AppData" / "Local")
+    elif sys.platform == "darwin":
+        base = home / "Library" / "Application Support"
+    else:
+        base = Path(os.environ.get("XDG_DATA_HOME") or home / ".local" / "share")
+    return base / "mpm"
+
+
+class Settings(BaseSettings):
+    """Everything configurable, with the environment variable `MPM_<NAME>`."""
+
+    model_config = SettingsConfigDict(env_prefix="MPM_", extra="ignore")
+
+    redis_url: str | None = Field(
+        None, description="Redis for the queue and the job records; unset: `mpm serve` embeds one")
+    data_dir: Path = Field(default_factory=default_data_dir,
+                           description="results (one folder per job) and the embedded Redis' data")
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=0, le=65535)
+
+    # Limits checked at submission, before anything is allocated.
+    max_particles: int = Field(2_000_000, gt=0)
+    max_grid_nodes: int = Field(4_000_000, gt=0)
+    max_steps: int = Field(10_000_000, gt=0)
+    max_body_bytes: int = Field(1_000_000, gt=0, description="largest accepted request body")
+    max_concurrent_jobs: int = Field(1000, gt=0, description="queued + running jobs; more answer 429")
+    max_processes: int = Field(1, gt=0, description="the most processes one job may use")
+
+    # Workers.
+    worker_concurrency: int = Field(1, gt=0, description="jobs one `mpm worker` runs at once")
+    max_job_seconds: float = Field(24 * 3600.0, gt=0, description="wall-clock limit of one job")
+    progress_interval: float = Field(0.5, gt=0, description="seconds between job-record updates")
+    cancel_grace_seconds: float = Field(10.0, gt=0, description="SIGTERM to SIGKILL on cancel")
+    warmup: bool = Field(True, description="compile the solver kernels when a worker starts")
+
+    log_level: str = "INFO"
+
+    @property
+    def jobs_dir(self) -> Path:
+        return self.data_dir / "jobs"
+
+    @property
+    def visibility_timeout(self) -> int:
+        """Seconds before Redis hands an unacknowledged job to another worker:
+        longer than the longest job, so that only a lost worker's job is redelivered."""
+        return int(self.max_job_seconds + 3600)
+
+
+@lru_cache
+def get_settings() -> Settings:
+    return Settings()
