@@ -1,0 +1,250 @@
+"""Preview images (PNG) of one frame of a result file.
+
+Particles are drawn coloured by one scalar per particle:
+
+* a per-particle scalar dataset as it is (``mass``, ``von_mises``, ``id``, ...);
+* a vector dataset (``velocity``, ``position``) by its magnitude;
+* a Voigt tensor dataset (``stress``, 6 columns) by its von Mises value;
+* ``velocity_magnitude``, ``von_mises`` and ``pressure`` are derived from
+  ``velocity`` / ``stress`` when the frame does not store them.
+
+1D scenes plot the value against x; 2D scenes are a scatter in the x-y plane;
+3D scenes are a perspective scatter with y drawn upwards (the axis gravity
+usually acts along). Rendering uses a private ``Figure`` + Agg canvas, never
+pyplot's global state, so it is safe in threads.
+"""
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from solver.results import RESULT_FILE, list_frames, read_frame, read_scene
+
+PREVIEW_FILE = "preview.png"
+DEFAULT_FIELD = "velocity_magnitude"
+DPI = 100
+# Squares drawn a little larger than the particle spacing so a body has no seams.
+MARKER_OVERLAP = 1.1
+
+
+def von_mises(voigt: np.ndarray) -> np.ndarray:
+    """Von Mises value of Voigt tensors (columns xx yy zz yz xz xy)."""
+    xx, yy, zz, yz, xz, xy = voigt.T
+    return np.sqrt(
+        0.5 * ((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2) + 3.0 * (yz**2 + xz**2 + xy**2)
+    )
+
+
+# Fields computed from others when the frame does not store them: name -> (source, function).
+DERIVED = {
+    "velocity_magnitude": ("velocity", lambda v: np.linalg.norm(v, axis=1)),
+    "von_mises": ("stress", von_mises),
+    "pressure": ("stress", lambda s: -(s[:, 0] + s[:, 1] + s[:, 2]) / 3.0),
+}
+
+
+def available_fields(fields: dict[str, np.ndarray]) -> list[str]:
+    """The names a preview of a frame with these datasets can be coloured by."""
+    derived = {name for name, (source, _) in DERIVED.items() if source in fields}
+    return sorted(set(fields) | derived)
+
+
+def scalar_values(fields: dict[str, np.ndarray], name: str) -> tuple[np.ndarray, str]:
+    """One value per particle for ``name`` and the label saying how it was reduced."""
+    if name not in fields and name in DERIVED and DERIVED[name][0] in fields:
+        source, function = DERIVED[name]
+        return function(np.asarray(fields[source], dtype=float)), name
+    if name not in fields:
+        raise ValueError(
+            f"field {name!r} is not in this frame; available: {', '.join(available_fields(fields))}"
+        )
+    data = np.asarray(fields[name], dtype=float).reshape(len(fields[name]), -1)
+    if data.shape[1] == 1:
+        return data[:, 0], name
+    if data.shape[1] == 6:
+        return von_mises(data), f"{name} (von Mises)"
+    return np.linalg.norm(data, axis=1), f"|{name}|"
+
+
+def default_field(fields: dict[str, np.ndarray], scene: dict[str, Any]) -> str:
+    """The scene's ``output.preview.field`` when the frame has it, else velocity magnitude."""
+    preview = (scene.get("output") or {}).get("preview") or {}
+    available = available_fields(fields)
+    for name in (preview.get("field"), DEFAULT_FIELD):
+        if name in available:
+            return name
+    return "body"  # always written: a frame without velocity is still drawn
+
+
+def render_preview(
+    result_path: str | os.PathLike,
+    frame: int = -1,
+    field: str | None = None,
+    out: str | os.PathLike | None = None,
+) -> bytes:
+    """Render a frame (``-1``: the last) of a result file as PNG bytes, also written to ``out``.
+
+    Raises ``ValueError`` naming the field and the available ones for an
+    unknown ``field``, and ``IndexError`` for a frame out of range.
+    """
+    scene = read_scene(result_path)
+    snapshot = read_frame(result_path, frame)
+    fields = snapshot["fields"]
+    values, label = scalar_values(fields, field or default_field(fields, scene))
+    dimension = int(scene["dimension"])
+    position = np.asarray(fields["position"], dtype=float).reshape(len(values), dimension)
+
+    figure = Figure(figsize=(7.0, 6.0) if dimension > 1 else (8.0, 4.5), dpi=DPI)
+    FigureCanvasAgg(figure)
+    lower, upper = _extent(scene, position)
+    spacing = _particle_spacing(scene, fields["body"], lower, upper, len(values))
+    if dimension == 1:
+        _plot_1d(figure, position[:, 0], values, label, lower, upper)
+    elif dimension == 2:
+        _plot_2d(figure, position, values, label, lower, upper, spacing)
+    else:
+        _plot_3d(figure, position, values, label, lower, upper, spacing)
+    figure.suptitle(
+        f"{scene.get('name') or 'scene'}\n"
+        f"t = {snapshot['time']:.6g}   step {snapshot['step']}   frame {snapshot['index']}",
+        fontsize=11,
+    )
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=DPI)
+    png = buffer.getvalue()
+    if out is not None:
+        Path(out).write_bytes(png)
+    return png
+
+
+def finish_outputs(out_dir: str | os.PathLike, scene: Any) -> Path | None:
+    """Write ``out_dir/preview.png`` of the last frame; the run loop calls it after closing the writer.
+
+    ``scene`` is the validated scene; its ``output.preview.field`` is drawn
+    when the last frame has it, velocity magnitude otherwise. Returns the PNG
+    path, or None when the result has no frame to draw (a run that failed
+    before its first frame).
+    """
+    result = Path(out_dir) / RESULT_FILE
+    if not list_frames(result):
+        return None
+    preview = getattr(getattr(scene, "output", None), "preview", None)
+    wanted = getattr(preview, "field", None)
+    fields = read_frame(result)["fields"]
+    png = Path(out_dir) / PREVIEW_FILE
+    render_preview(result, field=wanted if wanted in available_fields(fields) else None, out=png)
+    return png
+
+
+# -- geometry of the plot ----------------------------------------------------
+
+
+def _extent(scene: dict[str, Any], position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The grid box, or (grid-less scenes) the particles' bounding box with a margin."""
+    grid = scene.get("grid")
+    if grid:
+        return np.asarray(grid["lower"], dtype=float), np.asarray(grid["upper"], dtype=float)
+    finite = position[np.all(np.isfinite(position), axis=1)]
+    if len(finite) == 0:
+        return np.zeros(position.shape[1]), np.ones(position.shape[1])
+    lower, upper = finite.min(axis=0), finite.max(axis=0)
+    margin = 0.05 * max(float(np.max(upper - lower)), 1e-12)
+    return lower - margin, upper + margin
+
+
+def _particle_spacing(
+    scene: dict[str, Any], body: np.ndarray, lower: np.ndarray, upper: np.ndarray, count: int
+) -> np.ndarray:
+    """Initial distance between neighbouring particles, per particle (cell size / particles per cell)."""
+    grid = scene.get("grid")
+    if not grid or count == 0:
+        volume = float(np.prod(upper - lower))
+        return np.full(count, (volume / max(count, 1)) ** (1.0 / len(lower)))
+    cell = float(np.min(grid["cell_size"]))
+    per_body = np.array(
+        [cell / float(np.max(b.get("particles_per_cell") or 1)) for b in scene.get("bodies", [])]
+        or [cell]
+    )
+    return per_body[np.clip(np.asarray(body, dtype=int), 0, len(per_body) - 1)]
+
+
+def _colour_range(values: np.ndarray) -> tuple[float, float]:
+    finite = values[np.isfinite(values)]
+    if len(finite) == 0:
+        return 0.0, 1.0
+    low, high = float(finite.min()), float(finite.max())
+    if high - low <= 1e-12 * max(abs(low), abs(high), 1e-300):
+        pad = 0.5 * abs(low) if low else 0.5
+        return low - pad, high + pad
+    return low, high
+
+
+def _colour_bar(figure: Figure, mappable, axes, label: str, low: float, high: float) -> None:
+    bar = figure.colorbar(mappable, ax=axes, shrink=0.85, pad=0.04)
+    bar.set_label(f"{label}\nrange [{low:.4g}, {high:.4g}]")
+
+
+def _plot_1d(figure: Figure, x: np.ndarray, values: np.ndarray, label: str, lower, upper) -> None:
+    axes = figure.add_subplot()
+    order = np.argsort(x)
+    axes.plot(x[order], values[order], "-", color="0.6", linewidth=1.0, zorder=1)
+    axes.scatter(x[order], values[order], s=18, color="tab:blue", zorder=2)
+    axes.set_xlim(lower[0], upper[0])
+    low, high = _colour_range(values)
+    axes.set_ylim(low - 0.08 * (high - low), high + 0.08 * (high - low))
+    axes.set_xlabel("x")
+    axes.set_ylabel(f"{label}\nrange [{low:.4g}, {high:.4g}]")
+    axes.grid(True, alpha=0.3)
+    figure.subplots_adjust(top=0.84, left=0.14)
+
+
+def _plot_2d(figure: Figure, position, values, label: str, lower, upper, spacing) -> None:
+    axes = figure.add_subplot()
+    low, high = _colour_range(values)
+    points = axes.scatter(
+        position[:, 0], position[:, 1], c=values, vmin=low, vmax=high,
+        cmap="viridis", marker="s", linewidths=0,
+    )
+    axes.set_xlim(lower[0], upper[0])
+    axes.set_ylim(lower[1], upper[1])
+    axes.set_aspect("equal")
+    axes.set_xlabel("x")
+    axes.set_ylabel("y")
+    axes.set_facecolor("0.96")
+    _colour_bar(figure, points, axes, label, low, high)
+    figure.subplots_adjust(top=0.86)
+    # Marker sizes are in points: measure the laid-out axes to convert spacing to points.
+    figure.canvas.draw()
+    points_per_unit = axes.get_window_extent().width / (upper[0] - lower[0]) * 72.0 / DPI
+    points.set_sizes((MARKER_OVERLAP * spacing * points_per_unit) ** 2)
+
+
+def _plot_3d(figure: Figure, position, values, label: str, lower, upper, spacing) -> None:
+    axes = figure.add_subplot(projection="3d")
+    low, high = _colour_range(values)
+    # Matplotlib draws its z axis upwards; the scene's y is the vertical one.
+    points = axes.scatter(
+        position[:, 0], position[:, 2], position[:, 1], c=values, vmin=low, vmax=high,
+        cmap="viridis", marker="o", linewidths=0, depthshade=True,
+    )
+    axes.set_xlim(lower[0], upper[0])
+    axes.set_ylim(lower[2], upper[2])
+    axes.set_zlim(lower[1], upper[1])
+    axes.set_box_aspect((upper[0] - lower[0], upper[2] - lower[2], upper[1] - lower[1]))
+    axes.set_xlabel("x")
+    axes.set_ylabel("z")
+    axes.set_zlabel("y")
+    axes.view_init(elev=22, azim=-60)
+    _colour_bar(figure, points, axes, label, low, high)
+    figure.subplots_adjust(top=0.88)
+    figure.canvas.draw()
+    # The projected box is about 0.55 of the axes width along its longest edge.
+    longest = float(np.max(upper - lower))
+    points_per_unit = 0.55 * axes.get_window_extent().width / longest * 72.0 / DPI
+    points.set_sizes((1.3 * spacing * points_per_unit) ** 2)

@@ -1,0 +1,354 @@
+"""The result file: ``result.h5`` (layout of INTERFACES.md) and its XDMF sidecar.
+
+The run loop owns one :class:`ResultWriter` per run::
+
+    with ResultWriter(out_dir, scene, solver_version) as writer:
+        writer.write_frame(step, time, fields)      # each output frame
+        writer.append_series(time=t, dt=dt, ...)    # each logged step
+        writer.close("partial")                     # only when the run did not finish
+
+Leaving the ``with`` block normally closes the file as ``"complete"``; leaving
+it by an exception closes it as ``"partial"``. Every frame is flushed to disk
+when written, so a killed process keeps the frames written so far (with
+``status = "partial"``, the value the file carries until it is closed).
+
+The readers (:func:`list_frames`, :func:`read_frame`, :func:`read_series`)
+open the file without HDF5 file locking, so the service can read a file that
+a running job is still writing.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+FORMAT = "mpm-result"
+FORMAT_VERSION = 1
+RESULT_FILE = "result.h5"
+XDMF_FILE = "result.xdmf"
+STATUSES = ("complete", "partial")
+
+# Per-particle fields every frame carries (INTERFACES.md); the rest are the
+# fields the scene asked for.
+REQUIRED_FIELDS = ("id", "body", "mass", "position")
+INTEGER_DTYPES = {"id": np.int64, "body": np.int32}
+# Helper arrays for the XDMF sidecar, written at close: the vertex list of the
+# Polyvertex topology (0, 1, 2, ...) per particle count, and for 1D results the
+# positions padded with zeros to x, y, z per frame: XDMF has no one-coordinate
+# geometry, and ParaView's XDMF3 reader reads neither X_Y_Z nor HyperSlab items.
+XDMF_GROUP = "xdmf"
+
+
+class ResultWriter:
+    """Writes ``out_dir/result.h5`` frame by frame and ``out_dir/result.xdmf`` at close.
+
+    ``scene`` is the validated :class:`solver.scene.Scene` (anything with
+    ``model_dump_json()`` and ``dimension``).
+    """
+
+    def __init__(self, out_dir: str | os.PathLike, scene: Any, solver_version: str) -> None:
+        self.out_dir = Path(out_dir)
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        self.path = self.out_dir / RESULT_FILE
+        self.xdmf_path = self.out_dir / XDMF_FILE
+        self.dimension = int(scene.dimension)
+        self.frame_count = 0
+        self._series_rows: list[dict[str, float]] = []
+        self._closed = False
+        # No file lock: readers (preview, service) may open the file while it grows.
+        self._file = h5py.File(self.path, "w", locking=False)
+        attrs = self._file.attrs
+        attrs["format"] = FORMAT
+        attrs["format_version"] = FORMAT_VERSION
+        attrs["scene"] = scene.model_dump_json()
+        attrs["dimension"] = self.dimension
+        attrs["solver_version"] = str(solver_version)
+        attrs["status"] = "partial"
+        self._file.create_group("frames")
+        self._file.create_group("time_series")
+        self._file.flush()
+
+    def __enter__(self) -> ResultWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if not self._closed:
+            self.close("complete" if exc_type is None else "partial")
+
+    # -- frames ------------------------------------------------------------
+
+    def write_frame(self, step: int, time: float, fields: dict[str, np.ndarray]) -> str:
+        """Write one snapshot as ``/frames/NNNNNN`` and flush; returns the group name."""
+        self._check_open()
+        arrays = self._checked_fields(fields)
+        name = f"{self.frame_count:06d}"
+        group = self._file["frames"].create_group(name)
+        for key, array in arrays.items():
+            group.create_dataset(key, data=array)
+        # The attrs go last: readers take a frame without them as still being written.
+        group.attrs["time"] = float(time)
+        group.attrs["step"] = int(step)
+        self.frame_count += 1
+        self._flush_series()
+        self._file.flush()
+        return name
+
+    def _checked_fields(self, fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        missing = [key for key in REQUIRED_FIELDS if key not in fields]
+        if missing:
+            raise ValueError(f"frame is missing the required field(s) {', '.join(missing)}")
+        arrays: dict[str, np.ndarray] = {}
+        count = None
+        for key, value in fields.items():
+            if not key or "/" in key:
+                raise ValueError(f"invalid field name {key!r}")
+            array = np.ascontiguousarray(value, dtype=INTEGER_DTYPES.get(key, np.float64))
+            if array.ndim == 0:
+                raise ValueError(f"field {key!r} must have one row per particle, got a scalar")
+            if count is None:
+                count = array.shape[0]
+            elif array.shape[0] != count:
+                raise ValueError(
+                    f"field {key!r} has {array.shape[0]} rows, expected {count} (one per particle)"
+                )
+            arrays[key] = array
+        expected = {
+            "id": (count,), "body": (count,), "mass": (count,),
+            "position": (count, self.dimension), "velocity": (count, self.dimension),
+            "stress": (count, 6),
+        }
+        for key, shape in expected.items():
+            if key in arrays and arrays[key].shape != shape:
+                raise ValueError(f"field {key!r} has shape {arrays[key].shape}, expected {shape}")
+        return arrays
+
+    # -- time series -------------------------------------------------------
+
+    def append_series(self, **values: float) -> None:
+        """Buffer one row of the time series (``time``, ``dt``, energies, ...).
+
+        A key that first appears in a later row gets NaN for the earlier rows,
+        so every ``/time_series`` dataset has one value per row.
+        """
+        self._check_open()
+        row: dict[str, float] = {}
+        for key, value in values.items():
+            if not key or "/" in key:
+                raise ValueError(f"invalid time-series name {key!r}")
+            row[key] = float(value)
+        self._series_rows.append(row)
+
+    def _flush_series(self) -> None:
+        if not self._series_rows:
+            return
+        group = self._file["time_series"]
+        keys = {key for row in self._series_rows for key in row} | set(group.keys())
+        written = max((group[key].shape[0] for key in group), default=0)
+        new = len(self._series_rows)
+        for key in sorted(keys):
+            if key not in group:
+                dataset = group.create_dataset(
+                    key, shape=(written,), maxshape=(None,), dtype=np.float64,
+                    chunks=(1024,), fillvalue=np.nan,
+                )
+            else:
+                dataset = group[key]
+            dataset.resize((written + new,))
+            dataset[written:] = [row.get(key, math.nan) for row in self._series_rows]
+        self._series_rows.clear()
+
+    # -- closing -----------------------------------------------------------
+
+    def close(self, status: str = "complete") -> None:
+        """Write the status and the buffered series, close the file, write the XDMF sidecar."""
+        if status not in STATUSES:
+            raise ValueError(f"status must be one of {STATUSES}, got {status!r}")
+        if self._closed:
+            return
+        try:
+            self._flush_series()
+            self._write_xdmf_helpers()
+            self._file.attrs["status"] = status
+            self._file.flush()
+            xdmf = xdmf_document(self._file, self.path.name)
+        finally:
+            self._file.close()
+            self._closed = True
+        _write_atomically(self.xdmf_path, xdmf)
+
+    def _write_xdmf_helpers(self) -> None:
+        frames = self._file["frames"]
+        names = _complete_frames(self._file)
+        helpers = self._file.create_group(XDMF_GROUP)
+        for count in sorted({frames[name]["position"].shape[0] for name in names}):
+            helpers.create_dataset(f"vertices_{count}", data=np.arange(count, dtype=np.int64))
+        if self.dimension == 1:
+            for name in names:
+                x = frames[name]["position"][:, 0]
+                helpers.create_dataset(f"xyz_{name}", data=np.column_stack([x, 0 * x, 0 * x]))
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RuntimeError(f"{self.path} is already closed")
+
+
+# -- XDMF ------------------------------------------------------------------
+
+
+def xdmf_document(h5: h5py.File, h5_name: str) -> str:
+    """The XDMF 3 text describing every complete frame of an open result file.
+
+    One temporal collection of Polyvertex grids (one per frame); datasets are
+    referenced as ``h5_name:/frames/NNNNNN/field``, relative to the sidecar.
+    """
+    dimension = int(h5.attrs["dimension"])
+    root = ET.Element("Xdmf", Version="3.0")
+    domain = ET.SubElement(root, "Domain")
+    collection = ET.SubElement(
+        domain, "Grid", Name="particles", GridType="Collection", CollectionType="Temporal"
+    )
+    for name in _complete_frames(h5):
+        frame = h5["frames"][name]
+        count = frame["position"].shape[0]
+        grid = ET.SubElement(collection, "Grid", Name=f"frame_{name}", GridType="Uniform")
+        ET.SubElement(grid, "Time", Value=repr(float(frame.attrs["time"])))
+        topology = ET.SubElement(
+            grid, "Topology", TopologyType="Polyvertex",
+            NumberOfElements=str(count), NodesPerElement="1",
+        )
+        _data_item(topology, h5_name, h5[XDMF_GROUP][f"vertices_{count}"])
+        _geometry(grid, h5_name, frame, dimension)
+        for key in sorted(frame):
+            if key != "position":
+                _attributes(grid, h5_name, frame[key], dimension)
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _geometry(grid: ET.Element, h5_name: str, frame: h5py.Group, dimension: int) -> None:
+    if dimension == 1:
+        position = frame.file[XDMF_GROUP][f"xyz_{frame.name.rsplit('/', 1)[-1]}"]
+    else:
+        position = frame["position"]
+    geometry = ET.SubElement(grid, "Geometry", GeometryType="XY" if dimension == 2 else "XYZ")
+    _data_item(geometry, h5_name, position)
+
+
+def _attributes(grid: ET.Element, h5_name: str, dataset: h5py.Dataset, dimension: int) -> None:
+    """One XDMF attribute per field: scalar, vector (dim columns) or matrix (the rest)."""
+    name = dataset.name.rsplit("/", 1)[-1]
+    shape = dataset.shape
+    if len(shape) == 1 or (len(shape) == 2 and shape[1] == 1):
+        attribute = ET.SubElement(grid, "Attribute", Name=name, AttributeType="Scalar", Center="Node")
+        _data_item(attribute, h5_name, dataset)
+    elif len(shape) == 2 and shape[1] == dimension:
+        attribute = ET.SubElement(grid, "Attribute", Name=name, AttributeType="Vector", Center="Node")
+        _data_item(attribute, h5_name, dataset)
+    else:
+        # Voigt tensors (6 columns, xx yy zz yz xz xy) too: a Tensor6 attribute would
+        # be read in XDMF's xx xy xz yy yz zz order and mislabel the components.
+        # Rank-3 data (n, a, b) is described as (n, a*b): ParaView's XDMF2 reader
+        # would otherwise take b for the number of components.
+        attribute = ET.SubElement(grid, "Attribute", Name=name, AttributeType="Matrix", Center="Node")
+        _data_item(attribute, h5_name, dataset, dims=(shape[0], int(np.prod(shape[1:]))))
+
+
+def _number_type(dataset: h5py.Dataset) -> dict[str, str]:
+    kind = "Int" if dataset.dtype.kind in "iu" else "Float"
+    return {"NumberType": kind, "Precision": str(dataset.dtype.itemsize)}
+
+
+def _data_item(
+    parent: ET.Element, h5_name: str, dataset: h5py.Dataset, dims: tuple[int, ...] | None = None
+) -> None:
+    item = ET.SubElement(
+        parent, "DataItem", Format="HDF",
+        Dimensions=" ".join(str(d) for d in (dims or dataset.shape)), **_number_type(dataset),
+    )
+    item.text = f"{h5_name}:{dataset.name}"
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+# -- reading ---------------------------------------------------------------
+
+
+def open_result(path: str | os.PathLike) -> h5py.File:
+    """Open a result file for reading (no file lock: it may still be written)."""
+    h5 = h5py.File(path, "r", locking=False)
+    if h5.attrs.get("format") != FORMAT:
+        h5.close()
+        raise ValueError(f"{path} is not an MPM result file (format attribute {FORMAT!r} missing)")
+    return h5
+
+
+def _complete_frames(h5: h5py.File) -> list[str]:
+    frames = h5.get("frames")
+    if frames is None:
+        return []
+    return sorted(name for name in frames if "step" in frames[name].attrs)
+
+
+def list_frames(path: str | os.PathLike) -> list[dict[str, Any]]:
+    """Every complete frame: ``[{"index", "name", "time", "step", "particles"}]``."""
+    with open_result(path) as h5:
+        return [
+            {
+                "index": index,
+                "name": name,
+                "time": float(h5["frames"][name].attrs["time"]),
+                "step": int(h5["frames"][name].attrs["step"]),
+                "particles": int(h5["frames"][name]["position"].shape[0]),
+            }
+            for index, name in enumerate(_complete_frames(h5))
+        ]
+
+
+def read_frame(path: str | os.PathLike, frame: int = -1) -> dict[str, Any]:
+    """One frame (``-1``: the last): ``{"index", "name", "time", "step", "fields": {name: array}}``."""
+    with open_result(path) as h5:
+        names = _complete_frames(h5)
+        if not names:
+            raise IndexError(f"{path} has no frames yet")
+        if not -len(names) <= frame < len(names):
+            raise IndexError(
+                f"frame {frame} is out of range: {path} has {len(names)} frames (0..{len(names) - 1})"
+            )
+        index = frame % len(names)
+        group = h5["frames"][names[index]]
+        return {
+            "index": index,
+            "name": names[index],
+            "time": float(group.attrs["time"]),
+            "step": int(group.attrs["step"]),
+            "fields": {key: group[key][()] for key in group},
+        }
+
+
+def read_series(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """The time series written so far, ``{name: 1-D float64 array}``."""
+    with open_result(path) as h5:
+        series = h5.get("time_series")
+        return {} if series is None else {key: series[key][()] for key in series}
+
+
+def read_scene(path: str | os.PathLike) -> dict[str, Any]:
+    """The scene stored in a result file, as a plain dict."""
+    with open_result(path) as h5:
+        return json.loads(h5.attrs["scene"])
