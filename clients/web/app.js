@@ -1,0 +1,761 @@
+// The MPM dashboard: a job table, a job page and a "new job" form over the HTTP API (/v1).
+// Plain JavaScript, no build step, no network access beyond the service itself.
+// Routes (hash): #/jobs[?status=S], #/jobs/ID, #/new.
+"use strict";
+
+(() => {
+  const STATUSES = ["queued", "running", "succeeded", "failed", "cancelled"];
+  const ACTIVE = new Set(["queued", "running"]);
+  const PAGE_SIZE = 50;
+  const ENERGY_SERIES = [
+    ["kinetic_energy", "kinetic", "var(--kinetic)"],
+    ["strain_energy", "strain", "var(--strain)"],
+    ["total_energy", "total", "var(--total)"],
+  ];
+
+  // ---------------------------------------------------------------- DOM helpers
+
+  /** Element with attributes (on* are listeners) and children (strings become text, never HTML). */
+  function h(tag, attrs = {}, ...children) {
+    const svg = ["svg", "g", "path", "line", "polyline", "text", "rect", "circle", "title"].includes(tag);
+    const node = svg ? document.createElementNS("http://www.w3.org/2000/svg", tag) : document.createElement(tag);
+    for (const [key, value] of Object.entries(attrs)) {
+      if (value === null || value === undefined || value === false) continue;
+      if (key.startsWith("on")) node.addEventListener(key.slice(2), value);
+      else if (key === "dataset") Object.assign(node.dataset, value);
+      else node.setAttribute(key, value === true ? "" : value);
+    }
+    for (const child of children.flat()) {
+      if (child === null || child === undefined || child === false) continue;
+      node.append(child instanceof Node ? child : String(child));
+    }
+    return node;
+  }
+
+  // ---------------------------------------------------------------- formatting
+
+  function fmtNumber(x, digits = 4) {
+    if (x === null || x === undefined || !Number.isFinite(x)) return "–";
+    if (x === 0) return "0";
+    const abs = Math.abs(x);
+    if (abs >= 1e5 || abs < 1e-3) return x.toExponential(2);
+    return String(Number(x.toPrecision(digits)));
+  }
+
+  function fmtInteger(x) {
+    return x === null || x === undefined ? "–" : Math.round(x).toLocaleString("en-US");
+  }
+
+  function fmtDuration(seconds) {
+    if (seconds === null || seconds === undefined || !Number.isFinite(seconds) || seconds < 0) return "–";
+    const s = Math.round(seconds);
+    const hours = Math.floor(s / 3600), minutes = Math.floor((s % 3600) / 60), secs = s % 60;
+    const pad = (n) => String(n).padStart(2, "0");
+    return hours ? `${hours}:${pad(minutes)}:${pad(secs)}` : `${minutes}:${pad(secs)}`;
+  }
+
+  function fmtAge(iso) {
+    if (!iso) return "–";
+    const seconds = (Date.now() - Date.parse(iso)) / 1000;
+    if (!Number.isFinite(seconds)) return "–";
+    if (seconds < 60) return `${Math.max(0, Math.floor(seconds))} s ago`;
+    if (seconds < 3600) return `${Math.floor(seconds / 60)} min ago`;
+    if (seconds < 86400) return `${Math.floor(seconds / 3600)} h ago`;
+    return `${Math.floor(seconds / 86400)} d ago`;
+  }
+
+  function fmtBytes(bytes) {
+    if (bytes === null || bytes === undefined) return "–";
+    const units = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let value = bytes, unit = 0;
+    while (value >= 1024 && unit < units.length - 1) { value /= 1024; unit += 1; }
+    return `${value.toFixed(unit ? 1 : 0)} ${units[unit]}`;
+  }
+
+  function fmtTime(iso) {
+    return iso ? new Date(iso).toLocaleString() : "–";
+  }
+
+  function badge(status) {
+    return h("span", { class: `badge ${status}` }, status);
+  }
+
+  function progressBar(record) {
+    const percent = Math.round(Math.min(1, Math.max(0, record.progress || 0)) * 1000) / 10;
+    return h("div", { class: `progress ${record.status}`, role: "progressbar", "aria-valuenow": percent,
+                      "aria-valuemin": 0, "aria-valuemax": 100 },
+      h("div", { class: "progress-fill", style: `width: ${percent}%` }),
+      h("span", { class: "progress-label" }, `${percent.toFixed(1)}%`));
+  }
+
+  // ---------------------------------------------------------------- the API
+
+  /** An error answer of the service: {"error": {"code", "message", "details"}}. */
+  class ApiError extends Error {
+    constructor(status, code, message, details) {
+      super(message);
+      this.status = status;
+      this.code = code;
+      this.details = details;
+    }
+  }
+
+  /** The service could not be reached (or a gateway in front of it answered 502/503/504). */
+  class ConnectionLost extends Error {}
+
+  const auth = {
+    get token() { return localStorage.getItem("mpm.token") || ""; },
+    set token(value) { value ? localStorage.setItem("mpm.token", value) : localStorage.removeItem("mpm.token"); },
+  };
+
+  /** Call the API with a relative URL (the dashboard is served beside it); parses JSON unless raw. */
+  async function api(path, { method = "GET", body, raw = false } = {}) {
+    const headers = { Accept: "application/json" };
+    if (auth.token) headers.Authorization = `Bearer ${auth.token}`;
+    if (body !== undefined) headers["Content-Type"] = "application/json";
+    let response;
+    try {
+      response = await fetch(path, { method, headers, cache: "no-store",
+                                     body: body === undefined ? undefined : JSON.stringify(body) });
+    } catch (error) {
+      banner.connectionLost();
+      throw new ConnectionLost(`cannot reach the service: ${error.message}`);
+    }
+    if ([502, 503, 504].includes(response.status)) {
+      banner.connectionLost();
+      throw new ConnectionLost(`the service answered ${response.status}`);
+    }
+    banner.connectionOk();
+    if (!response.ok) {
+      let payload = null;
+      try { payload = await response.json(); } catch (_) { /* not JSON */ }
+      const error = (payload && payload.error) || {};
+      if (response.status === 401) banner.needToken();
+      throw new ApiError(response.status, error.code || null,
+                         error.message || `${method} ${path} answered ${response.status}`, error.details || null);
+    }
+    if (raw) return response;
+    return response.status === 204 ? null : response.json();
+  }
+
+  const jobUrl = (id, tail = "") => `v1/jobs/${encodeURIComponent(id)}${tail}`;
+
+  // ---------------------------------------------------------------- banner (connection, token)
+
+  const banner = {
+    node: document.getElementById("banner"),
+    state: "ok",
+    connectionLost() {
+      if (this.state === "lost") return;
+      this.state = "lost";
+      this.show("warning", "Lost the connection to the service. Retrying…",
+                h("button", { class: "button small", onclick: () => poller.current && poller.current.now() }, "Retry now"));
+    },
+    connectionOk() {
+      if (this.state !== "lost") return;
+      this.state = "ok";
+      this.show("ok", "Connection restored.");
+      clearTimeout(this.timer);
+      this.timer = setTimeout(() => { if (this.state === "ok") this.node.hidden = true; }, 2500);
+    },
+    needToken() {
+      if (this.state === "token") return;
+      this.state = "token";
+      const input = h("input", { type: "password", placeholder: "API token", "aria-label": "API token" });
+      const save = (event) => {
+        event.preventDefault();
+        auth.token = input.value.trim();
+        this.state = "ok";
+        this.node.hidden = true;
+        route();
+      };
+      this.show("warning", "This service needs an API token.", h("form", { class: "token-form", onsubmit: save },
+        input, h("button", { class: "button small", type: "submit" }, "Save")));
+    },
+    show(kind, text, ...extra) {
+      clearTimeout(this.timer);
+      this.node.className = `banner ${kind}`;
+      this.node.replaceChildren(h("span", {}, text), ...extra);
+      this.node.hidden = false;
+    },
+  };
+
+  // ---------------------------------------------------------------- polling
+
+  /**
+   * Runs `task` again and again. `task` resolves to true while something is active
+   * (then it polls every `fast` ms); when nothing runs the delay doubles up to
+   * `idleMax`, after an error up to `errorMax`; a hidden tab polls at most every
+   * `hidden` ms and polls at once when it is shown again. `cleanup` runs on stop.
+   */
+  class Poller {
+    constructor(task, { fast = 1000, idleMax = 15000, errorMax = 30000, hidden = 30000, cleanup = () => {} } = {}) {
+      Object.assign(this, { task, fast, idleMax, errorMax, hidden, cleanup });
+      this.idleDelay = 0;
+      this.errorDelay = 0;
+      this.onVisibility = () => { if (!document.hidden) this.now(); };
+    }
+
+    start() {
+      this.stopped = false;
+      document.addEventListener("visibilitychange", this.onVisibility);
+      this.now();
+    }
+
+    stop() {
+      this.stopped = true;
+      clearTimeout(this.timer);
+      document.removeEventListener("visibilitychange", this.onVisibility);
+      this.cleanup();
+    }
+
+    /** Poll right away (after an action, or when the tab comes back). */
+    async now() {
+      if (this.stopped) return;
+      if (this.inFlight) { this.again = true; return; }
+      clearTimeout(this.timer);
+      this.inFlight = true;
+      let delay;
+      try {
+        const active = await this.task();
+        this.errorDelay = 0;
+        this.idleDelay = active ? 0 : Math.min(this.idleMax, (this.idleDelay || this.fast) * 2);
+        delay = active ? this.fast : this.idleDelay;
+      } catch (error) {
+        if (!(error instanceof ConnectionLost)) console.error(error);
+        this.errorDelay = Math.min(this.errorMax, (this.errorDelay || 500) * 2);
+        delay = this.errorDelay;
+      } finally {
+        this.inFlight = false;
+      }
+      if (document.hidden) delay = Math.max(delay, this.hidden);
+      if (this.again) { this.again = false; delay = 0; }
+      this.delay = delay;
+      document.body.dataset.pollDelay = String(delay);  // visible to tests and the curious
+      if (!this.stopped) this.timer = setTimeout(() => this.now(), delay);
+    }
+  }
+
+  const poller = { current: null };
+
+  // ---------------------------------------------------------------- JSON view (scene, validation errors)
+
+  /**
+   * The document as indented lines; each line carries `data-path` in the scene's
+   * error notation (`bodies[1].geometry.radius`), and `errors` (path -> messages)
+   * are shown next to their line. An error whose path is not in the document
+   * (a missing key) goes next to its nearest ancestor that is.
+   */
+  function jsonView(document_, errors = new Map()) {
+    const lines = [];
+    const paths = new Set();
+    const indent = (depth) => "  ".repeat(depth);
+
+    function scalar(value) {
+      if (typeof value === "string") return h("span", { class: "j-str" }, JSON.stringify(value));
+      if (typeof value === "number") return h("span", { class: "j-num" }, String(value));
+      return h("span", { class: "j-lit" }, String(value));
+    }
+
+    function walk(value, path, depth, key, last) {
+      const comma = last ? "" : ",";
+      const label = key === null ? [] : [h("span", { class: "j-key" }, JSON.stringify(key)), ": "];
+      paths.add(path);
+      if (value !== null && typeof value === "object") {
+        const entries = Array.isArray(value) ? value.map((v, i) => [i, v]) : Object.entries(value);
+        const [open, close] = Array.isArray(value) ? ["[", "]"] : ["{", "}"];
+        if (!entries.length) {
+          lines.push([path, [indent(depth), ...label, open + close + comma]]);
+          return;
+        }
+        lines.push([path, [indent(depth), ...label, open]]);
+        entries.forEach(([k, v], i) => {
+          const child = Array.isArray(value) ? `${path}[${k}]` : (path ? `${path}.${k}` : k);
+          walk(v, child, depth + 1, Array.isArray(value) ? null : k, i === entries.length - 1);
+        });
+        lines.push([null, [indent(depth), close + comma]]);
+      } else {
+        lines.push([path, [indent(depth), ...label, scalar(value), comma]]);
+      }
+    }
+    walk(document_, "", 0, null, true);
+
+    // attach every error to its line, or to the nearest ancestor that exists
+    const placed = new Map();
+    for (const [path, messages] of errors) {
+      let anchor = path;
+      while (anchor && !paths.has(anchor)) anchor = anchor.replace(/(\.[^.[\]]+|\[\d+\])$|^[^.[\]]+$/, "");
+      const items = placed.get(anchor) || [];
+      for (const message of messages) items.push(anchor === path ? message : `${path}: ${message}`);
+      placed.set(anchor, items);
+    }
+
+    return h("pre", { class: "json" }, lines.map(([path, parts]) => {
+      const messages = path === null ? [] : placed.get(path) || [];
+      return h("div", { class: messages.length ? "line has-error" : "line", dataset: path === null ? {} : { path } },
+        h("span", { class: "code" }, parts),
+        messages.map((message) => h("span", { class: "field-error" }, message)));
+    }));
+  }
+
+  // ---------------------------------------------------------------- energy plot (SVG)
+
+  function niceTicks(min, max, count = 5) {
+    if (!(max > min)) { max = min + 1; }
+    const raw = (max - min) / count;
+    const magnitude = 10 ** Math.floor(Math.log10(raw));
+    const step = [1, 2, 2.5, 5, 10].map((m) => m * magnitude).find((s) => s >= raw);
+    const ticks = [];
+    for (let t = Math.ceil(min / step) * step; t <= max + step * 1e-9; t += step) ticks.push(Number(t.toPrecision(12)));
+    return ticks;
+  }
+
+  /** Line plot of the energies against time; thins long series to at most ~1500 points. */
+  function energyPlot(series) {
+    const time = series.time || [];
+    const present = ENERGY_SERIES.filter(([key]) => Array.isArray(series[key]) && series[key].length);
+    if (time.length < 2 || !present.length) {
+      return h("div", { class: "placeholder" }, "No energy data yet.");
+    }
+    const stride = Math.max(1, Math.ceil(time.length / 1500));
+    const index = [];
+    for (let i = 0; i < time.length; i += stride) index.push(i);
+    if (index[index.length - 1] !== time.length - 1) index.push(time.length - 1);
+
+    const values = present.flatMap(([key]) => index.map((i) => series[key][i])).filter(Number.isFinite);
+    let [ymin, ymax] = [Math.min(0, ...values), Math.max(...values)];
+    if (!(ymax > ymin)) ymax = ymin + 1;
+    const yTicks = niceTicks(ymin, ymax);
+    ymin = Math.min(ymin, yTicks[0]);
+    ymax = Math.max(ymax, yTicks[yTicks.length - 1]);
+    const [xmin, xmax] = [time[0], time[time.length - 1]];
+
+    const W = 560, H = 300, left = 64, right = 16, top = 16, bottom = 40;
+    const x = (t) => left + ((t - xmin) / (xmax - xmin || 1)) * (W - left - right);
+    const y = (e) => H - bottom - ((e - ymin) / (ymax - ymin)) * (H - top - bottom);
+
+    const grid = yTicks.map((t) => h("g", { class: "tick" },
+      h("line", { x1: left, x2: W - right, y1: y(t), y2: y(t) }),
+      h("text", { x: left - 8, y: y(t) + 4, "text-anchor": "end" }, fmtNumber(t, 3))));
+    const xTicks = niceTicks(xmin, xmax, 6).filter((t) => t >= xmin && t <= xmax).map((t) => h("g", { class: "tick x" },
+      h("line", { x1: x(t), x2: x(t), y1: H - bottom, y2: H - bottom + 5 }),
+      h("text", { x: x(t), y: H - bottom + 19, "text-anchor": "middle" }, fmtNumber(t, 3))));
+    const lines = present.map(([key, label, colour]) => {
+      const points = index.filter((i) => Number.isFinite(series[key][i]))
+        .map((i) => `${x(time[i]).toFixed(1)},${y(series[key][i]).toFixed(1)}`).join(" ");
+      return h("polyline", { class: `series ${label}`, points, style: `stroke: ${colour}` }, h("title", {}, `${label} energy`));
+    });
+
+    return h("figure", { class: "energy" },
+      h("svg", { class: "energy-plot", viewBox: `0 0 ${W} ${H}`, role: "img", "aria-label": "energy against time" },
+        grid, xTicks,
+        h("line", { class: "axis", x1: left, x2: W - right, y1: H - bottom, y2: H - bottom }),
+        h("line", { class: "axis", x1: left, x2: left, y1: top, y2: H - bottom }),
+        h("text", { class: "axis-label", x: (left + W - right) / 2, y: H - 4, "text-anchor": "middle" }, "time"),
+        lines),
+      h("figcaption", { class: "legend" }, present.map(([key, label, colour]) =>
+        h("span", { class: "legend-item" }, h("i", { style: `background: ${colour}` }), label))));
+  }
+
+  // ---------------------------------------------------------------- view: job list
+
+  function jobsView(container, params) {
+    const status = STATUSES.includes(params.get("status")) ? params.get("status") : "";
+    let pages = 1;
+    const body = h("tbody");
+    const empty = h("div", { class: "placeholder", hidden: true });
+    const more = h("button", { class: "button ghost", hidden: true, onclick: () => { pages += 1; poller.current.now(); } },
+      "Show older jobs");
+    const filters = h("div", { class: "filters", role: "group", "aria-label": "status filter" },
+      ["", ...STATUSES].map((s) => h("a", {
+        class: s === status ? "chip active" : "chip", href: s ? `#/jobs?status=${s}` : "#/jobs",
+        dataset: { status: s || "all" },
+      }, s || "all")));
+
+    container.replaceChildren(h("section", { class: "card" },
+      h("div", { class: "toolbar" }, h("h1", {}, "Jobs"), filters),
+      h("div", { class: "table-wrap" }, h("table", { class: "jobs" },
+        h("thead", {}, h("tr", {}, ["Name", "Status", "Progress", "Sim time", "Steps/s", "ETA", "Age"]
+          .map((title) => h("th", {}, title)))),
+        body)),
+      empty, more));
+
+    async function load() {
+      const jobs = [];
+      let cursor = null;
+      for (let page = 0; page < pages; page += 1) {
+        const query = new URLSearchParams({ limit: PAGE_SIZE });
+        if (status) query.set("status", status);
+        if (cursor) query.set("cursor", cursor);
+        const answer = await api(`v1/jobs?${query}`);
+        jobs.push(...answer.jobs);
+        cursor = answer.next_cursor;
+        if (!cursor) break;
+      }
+      body.replaceChildren(...jobs.map(jobRow));
+      empty.hidden = jobs.length > 0;
+      empty.replaceChildren(status ? `No ${status} jobs.` : "No jobs yet. ",
+                            status ? "" : h("a", { href: "#/new" }, "Submit one."));
+      more.hidden = !cursor;
+      return jobs.some((job) => ACTIVE.has(job.status));
+    }
+    return new Poller(load);
+  }
+
+  function jobRow(job) {
+    const open = () => { location.hash = `#/jobs/${job.id}`; };
+    const end = job.end_time ? ` / ${fmtNumber(job.end_time)}` : "";
+    return h("tr", { class: "job-row", dataset: { id: job.id, status: job.status }, onclick: open },
+      h("td", { class: "name" }, h("a", { href: `#/jobs/${job.id}` }, job.name || "(unnamed)"),
+        h("div", { class: "id" }, job.id.slice(0, 8))),
+      h("td", {}, badge(job.status)),
+      h("td", { class: "progress-cell" }, progressBar(job)),
+      h("td", { class: "num" }, `${fmtNumber(job.sim_time)}${end}`),
+      h("td", { class: "num" }, job.status === "running" ? fmtInteger(job.steps_per_second) : "–"),
+      h("td", { class: "num" }, job.status === "running" ? fmtDuration(job.eta_seconds) : "–"),
+      h("td", { class: "age", title: fmtTime(job.created_at) }, fmtAge(job.created_at)));
+  }
+
+  // ---------------------------------------------------------------- view: one job
+
+  /** Frames and fields a preview can show, from the validated scene (see solver/preview.py). */
+  function previewChoices(scene) {
+    const output = (scene && scene.output) || {};
+    const stored = new Set([...(output.fields || ["position", "velocity", "stress"]), "mass"]);
+    const fields = new Set(stored);
+    if (stored.has("velocity")) fields.add("velocity_magnitude");
+    if (stored.has("stress")) { fields.add("von_mises"); fields.add("pressure"); }
+    fields.delete("position");
+    const preferred = (output.preview && output.preview.field) || "velocity_magnitude";
+    return { frames: output.frames || 1, fields: [...fields].sort(), preferred };
+  }
+
+  function jobView(container, id) {
+    let record = null;
+    let scene = null;
+    let lastPreviewStep = -1;
+    let lastSeriesAt = 0;
+    let finishedShown = false;
+    let previewUrl = null;
+
+    const title = h("h1", {}, "Job");
+    const status = h("span");
+    const stats = h("dl", { class: "stats" });
+    const progress = h("div");
+    const errorBox = h("div", { class: "diagnostic", hidden: true });
+    const cancel = h("button", { class: "button danger", onclick: doCancel }, "Cancel");
+    const download = h("button", { class: "button", onclick: doDownload }, "Download HDF5");
+    const remove = h("button", { class: "button ghost danger", onclick: doDelete }, "Delete");
+    const image = h("img", { class: "preview-image", alt: "preview of the latest frame" });
+    const imageNote = h("div", { class: "placeholder" }, "No frame yet.");
+    const frameSlider = h("input", { type: "range", min: 0, max: 0, value: 0, step: 1, "aria-label": "frame",
+                                    oninput: () => schedulePreview() });
+    const frameLabel = h("span", { class: "frame-label" });
+    const fieldSelect = h("select", { "aria-label": "field", onchange: () => schedulePreview() });
+    const controls = h("div", { class: "preview-controls", hidden: true },
+      h("label", { class: "slider" }, "Frame", frameSlider, frameLabel),
+      h("label", {}, "Field", fieldSelect));
+    const plot = h("div", { class: "plot" }, h("div", { class: "placeholder" }, "No energy data yet."));
+    const sceneBox = h("div", { class: "scene" }, h("div", { class: "placeholder" }, "Loading…"));
+
+    container.replaceChildren(
+      h("a", { class: "back", href: "#/jobs" }, "← All jobs"),
+      h("section", { class: "card job-head" },
+        h("div", { class: "job-title" }, h("div", {}, title, h("code", { class: "id" }, id)), status),
+        h("div", { class: "actions" }, cancel, download, remove),
+        progress, stats, errorBox),
+      h("div", { class: "columns" },
+        h("section", { class: "card" }, h("h2", {}, "Preview"), h("div", { class: "preview-frame" }, image, imageNote), controls),
+        h("section", { class: "card" }, h("h2", {}, "Energy"), plot)),
+      h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Scene")), sceneBox)));
+
+    function renderRecord() {
+      title.textContent = record.name || "(unnamed)";
+      document.title = `${record.name || id} · MPM`;
+      status.replaceChildren(badge(record.status));
+      progress.replaceChildren(progressBar(record));
+      const summary = record.summary || {};
+      const running = record.status === "running";
+      const rows = [
+        ["Step", fmtInteger(record.step)],
+        ["Sim time", `${fmtNumber(record.sim_time)}${record.end_time ? ` / ${fmtNumber(record.end_time)}` : ""}`],
+        ["Steps/s", running ? fmtInteger(record.steps_per_second) : "–"],
+        ["ETA", running ? fmtDuration(record.eta_seconds) : "–"],
+        ["Particles", fmtInteger(summary.particles)],
+        ["Grid nodes", fmtInteger(summary.grid_nodes)],
+        ["Created", fmtTime(record.created_at)],
+        ["Finished", fmtTime(record.finished_at)],
+      ];
+      stats.replaceChildren(...rows.map(([k, v]) => h("div", {}, h("dt", {}, k), h("dd", {}, v))));
+      errorBox.hidden = !record.error;
+      errorBox.replaceChildren(h("strong", {}, "Diagnostic"), h("pre", {}, record.error || ""));
+      cancel.disabled = !ACTIVE.has(record.status);
+      download.disabled = ACTIVE.has(record.status);
+      remove.disabled = ACTIVE.has(record.status);
+    }
+
+    async function loadPreview(frame, field) {
+      const query = new URLSearchParams({ frame });
+      if (field) query.set("field", field);
+      try {
+        const response = await api(jobUrl(id, `/preview.png?${query}`), { raw: true });
+        const url = URL.createObjectURL(await response.blob());
+        await new Promise((resolve, reject) => { image.onload = resolve; image.onerror = reject; image.src = url; });
+        if (previewUrl) URL.revokeObjectURL(previewUrl);
+        previewUrl = url;
+        image.hidden = false;
+        imageNote.hidden = true;
+      } catch (error) {
+        if (error instanceof ConnectionLost) throw error;
+        image.hidden = !previewUrl;
+        imageNote.hidden = false;
+        imageNote.textContent = error instanceof ApiError && error.status === 409
+          ? "No frame yet." : `No preview: ${error.message}`;
+      }
+    }
+
+    let previewTimer = null;
+    function schedulePreview() {
+      const { frames } = previewChoices(scene);
+      const frame = Number(frameSlider.value);
+      const end = record && record.end_time;
+      frameLabel.textContent = `${frame + 1} / ${frames}` +
+        (end && frames > 1 ? `  (t ≈ ${fmtNumber((end * frame) / (frames - 1), 3)})` : "");
+      clearTimeout(previewTimer);
+      previewTimer = setTimeout(() => loadPreview(frame, fieldSelect.value).catch(() => {}), 120);
+    }
+
+    function showFinishedControls() {
+      const { frames, fields, preferred } = previewChoices(scene);
+      fieldSelect.replaceChildren(...fields.map((f) => h("option", { value: f, selected: f === preferred }, f)));
+      frameSlider.max = String(Math.max(0, frames - 1));
+      frameSlider.value = frameSlider.max;
+      controls.hidden = false;
+      schedulePreview();
+    }
+
+    async function loadSeries() {
+      lastSeriesAt = Date.now();
+      try {
+        plot.replaceChildren(energyPlot(await api(jobUrl(id, "/series"))));
+      } catch (error) {
+        if (error instanceof ConnectionLost) throw error;
+        if (!(error instanceof ApiError && error.status === 409)) {
+          plot.replaceChildren(h("div", { class: "placeholder" }, `No energy data: ${error.message}`));
+        }
+      }
+    }
+
+    async function load() {
+      try {
+        record = await api(jobUrl(id));
+      } catch (error) {
+        if (error instanceof ApiError && error.status === 404) {
+          container.replaceChildren(h("section", { class: "card" }, h("h1", {}, "No such job"),
+            h("p", {}, "It may have been deleted. "), h("a", { href: "#/jobs" }, "Back to all jobs")));
+          poller.current && poller.current.stop();
+          return false;
+        }
+        throw error;
+      }
+      renderRecord();
+      if (scene === null) {
+        scene = await api(jobUrl(id, "/scene"));
+        sceneBox.replaceChildren(jsonView(scene));
+      }
+      if (record.status === "running" && record.step !== lastPreviewStep) {
+        lastPreviewStep = record.step;
+        await loadPreview(-1, null);
+      }
+      if (record.status === "running" && Date.now() - lastSeriesAt > 4000) await loadSeries();
+      if (!ACTIVE.has(record.status) && !finishedShown) {
+        finishedShown = true;
+        showFinishedControls();
+        await loadSeries();
+      }
+      return ACTIVE.has(record.status);
+    }
+
+    async function doCancel() {
+      cancel.disabled = true;
+      try {
+        await api(jobUrl(id, "/cancel"), { method: "POST" });
+      } catch (error) {
+        if (!(error instanceof ConnectionLost)) alert(`Could not cancel: ${error.message}`);
+      }
+      poller.current.now();
+    }
+
+    async function doDownload() {
+      download.disabled = true;
+      try {
+        const blob = await (await api(jobUrl(id, "/result.h5"), { raw: true })).blob();
+        const url = URL.createObjectURL(blob);
+        const link = h("a", { href: url, download: `${record.name || id}.h5`, hidden: true });
+        document.body.append(link);
+        link.click();
+        link.remove();
+        setTimeout(() => URL.revokeObjectURL(url), 10000);
+      } catch (error) {
+        if (!(error instanceof ConnectionLost)) alert(`Could not download: ${error.message}`);
+      } finally {
+        download.disabled = ACTIVE.has(record.status);
+      }
+    }
+
+    async function doDelete() {
+      if (!confirm(`Delete job "${record.name || id}" and its files?`)) return;
+      try {
+        await api(jobUrl(id), { method: "DELETE" });
+        location.hash = "#/jobs";
+      } catch (error) {
+        if (!(error instanceof ConnectionLost)) alert(`Could not delete: ${error.message}`);
+      }
+    }
+
+    return new Poller(load, { cleanup: () => {
+      clearTimeout(previewTimer);
+      if (previewUrl) URL.revokeObjectURL(previewUrl);
+    } });
+  }
+
+  // ---------------------------------------------------------------- view: new job
+
+  /** Where JSON.parse failed, as "line L, column C" (Chromium says "at position N" or "(line L column C)"). */
+  function parseErrorText(text, error) {
+    const position = /position (\d+)/.exec(error.message);
+    if (!position) return error.message;
+    const before = text.slice(0, Number(position[1]));
+    const line = before.split("\n").length;
+    const column = before.length - before.lastIndexOf("\n");
+    return `line ${line}, column ${column}: ${error.message}`;
+  }
+
+  function newJobView(container) {
+    const editor = h("textarea", { class: "editor", spellcheck: "false", "aria-label": "scene JSON",
+                                   placeholder: "Paste a scene (JSON) here, or start from an example.",
+                                   oninput: () => sessionStorage.setItem("mpm.draft", editor.value) });
+    editor.value = sessionStorage.getItem("mpm.draft") || "";
+    const examples = h("select", { "aria-label": "example", onchange: pickExample }, h("option", { value: "" }, "Start from an example…"));
+    const file = h("input", { type: "file", accept: ".json,application/json", hidden: true, onchange: pickFile });
+    const processes = h("input", { type: "number", min: 1, step: 1, placeholder: "1", class: "processes", "aria-label": "processes" });
+    const validate = h("button", { class: "button", onclick: () => check(false) }, "Validate");
+    const submit = h("button", { class: "button primary", onclick: () => check(true) }, "Submit");
+    const outcome = h("div", { class: "outcome" },
+      h("div", { class: "placeholder" }, "Validate to see the particles, grid nodes, steps and memory the scene implies."));
+
+    container.replaceChildren(h("div", { class: "columns new-job" },
+      h("section", { class: "card" },
+        h("div", { class: "toolbar" }, h("h1", {}, "New job"),
+          h("div", { class: "row" }, examples, h("button", { class: "button ghost", onclick: () => file.click() }, "Open file…"), file)),
+        editor,
+        h("div", { class: "row end" }, h("label", { class: "inline" }, "Processes", processes), validate, submit)),
+      h("section", { class: "card" }, h("h2", {}, "Validation"), outcome)));
+
+    api("v1/examples").then((answer) => {
+      examples.append(...answer.examples.map((e) =>
+        h("option", { value: e.name }, e.title ? `${e.title} (${e.name})` : e.name)));
+    }).catch(() => {});
+
+    async function pickExample() {
+      if (!examples.value) return;
+      const scene = await api(`v1/examples/${encodeURIComponent(examples.value)}`);
+      setText(JSON.stringify(scene, null, 2));
+    }
+
+    async function pickFile() {
+      if (file.files.length) setText(await file.files[0].text());
+      file.value = "";
+    }
+
+    function setText(text) {
+      editor.value = text;
+      sessionStorage.setItem("mpm.draft", text);
+      outcome.replaceChildren();
+    }
+
+    async function check(andSubmit) {
+      let scene;
+      try {
+        scene = JSON.parse(editor.value);
+      } catch (error) {
+        outcome.replaceChildren(h("div", { class: "errors-head" }, "The scene is not valid JSON"),
+          h("ul", { class: "errors" }, h("li", {}, parseErrorText(editor.value, error))));
+        return;
+      }
+      validate.disabled = submit.disabled = true;
+      try {
+        if (andSubmit) {
+          const body = { scene };
+          if (processes.value) body.processes = Number(processes.value);
+          const job = await api("v1/jobs", { method: "POST", body });
+          sessionStorage.removeItem("mpm.draft");
+          location.hash = `#/jobs/${job.id}`;
+        } else {
+          showSummary((await api("v1/scenes/validate", { method: "POST", body: scene })).summary);
+        }
+      } catch (error) {
+        if (error instanceof ApiError && error.status === 422 && Array.isArray(error.details)) showErrors(scene, error);
+        else if (!(error instanceof ConnectionLost)) {
+          outcome.replaceChildren(h("div", { class: "errors-head" }, error.message));
+        }
+      } finally {
+        validate.disabled = submit.disabled = false;
+      }
+    }
+
+    function showSummary(summary) {
+      const rows = [
+        ["Particles", fmtInteger(summary.particles)],
+        ["Grid nodes", fmtInteger(summary.grid_nodes)],
+        ["Estimated steps", fmtInteger(summary.estimated_steps)],
+        ["Memory", fmtBytes(summary.memory_bytes)],
+        ["Estimated run time", fmtDuration(summary.estimated_run_seconds)],
+      ];
+      outcome.replaceChildren(h("div", { class: "valid" }, "✓ The scene is valid."),
+        h("dl", { class: "stats summary" }, rows.map(([k, v]) => h("div", {}, h("dt", {}, k), h("dd", {}, v)))));
+    }
+
+    function showErrors(scene, error) {
+      const byPath = new Map();
+      for (const item of error.details) {
+        const path = item.path || "";
+        byPath.set(path, [...(byPath.get(path) || []), item.message]);
+      }
+      outcome.replaceChildren(
+        h("div", { class: "errors-head" }, `${error.details.length} problem${error.details.length === 1 ? "" : "s"} in the scene`),
+        h("ul", { class: "errors" }, error.details.map((item) =>
+          h("li", { dataset: { path: item.path || "" } }, h("code", {}, item.path || "(scene)"), " ", item.message))),
+        h("div", { class: "annotated" }, jsonView(scene, byPath)));
+      const first = outcome.querySelector(".line.has-error");
+      if (first) first.scrollIntoView({ block: "nearest" });
+    }
+  }
+
+  // ---------------------------------------------------------------- routing
+
+  const view = document.getElementById("view");
+
+  function route() {
+    if (poller.current) poller.current.stop();
+    poller.current = null;
+    const [path, query = ""] = location.hash.replace(/^#/, "").split("?");
+    const params = new URLSearchParams(query);
+    const parts = path.split("/").filter(Boolean);
+    let section = "jobs";
+    document.title = "MPM dashboard";
+    if (parts[0] === "jobs" && parts[1]) {
+      poller.current = jobView(view, decodeURIComponent(parts[1]));
+    } else if (parts[0] === "new") {
+      section = "new";
+      newJobView(view);
+    } else {
+      poller.current = jobsView(view, params);
+    }
+    document.querySelectorAll("[data-nav]").forEach((a) => a.classList.toggle("current", a.dataset.nav === section));
+    if (poller.current) poller.current.start();
+  }
+
+  window.addEventListener("hashchange", route);
+  route();
+})();
