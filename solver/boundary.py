@@ -1,0 +1,64 @@
+"""Grid boundary conditions as (node, axis, value) constraints.
+
+Walls fix components on a face of the grid: `stick` all of them, `slip` the
+normal one. Velocity conditions fix the given components on every node inside a
+box; a value may be an expression in t, re-evaluated each step.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from solver.expressions import compile_expression
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+class Constraints:
+    def __init__(self, scene, grid):
+        nodes, axes, values, expressions = [], [], [], []
+        positions = grid.node_positions()
+        dim = scene.dimension
+        tol = 1e-9 * float(np.min(grid.h))
+        for bc in scene.boundary_conditions:
+            if bc.type == "wall":
+                axis = AXES[bc.face[0]]
+                layer = 0 if bc.face[1] == "-" else int(grid.cells[axis])
+                index = np.arange(grid.n_nodes)
+                on_face = (index // grid.strides[axis]) % (grid.cells[axis] + 1) == layer
+                fixed_axes = range(dim) if bc.mode == "stick" else (axis,)
+                for a in fixed_axes:
+                    sel = np.flatnonzero(on_face)
+                    nodes.append(sel)
+                    axes.append(np.full(sel.size, a))
+                    values.append(np.zeros(sel.size))
+                    expressions.append(None)
+            elif bc.type == "velocity":
+                lower = np.asarray(bc.where.lower) - tol
+                upper = np.asarray(bc.where.upper) + tol
+                inside = np.all((positions >= lower) & (positions <= upper), axis=1)
+                sel = np.flatnonzero(inside)
+                for a, component in enumerate(bc.velocity):
+                    if component is None:
+                        continue
+                    nodes.append(sel)
+                    axes.append(np.full(sel.size, a))
+                    if isinstance(component, str):
+                        values.append(np.zeros(sel.size))
+                        expressions.append(compile_expression(component, ("t",)))
+                    else:
+                        values.append(np.full(sel.size, float(component)))
+                        expressions.append(None)
+        self._blocks = list(zip(values, expressions))
+        self.node = np.ascontiguousarray(np.concatenate(nodes) if nodes else np.zeros(0, np.int64), dtype=np.int64)
+        self.axis = np.ascontiguousarray(np.concatenate(axes) if axes else np.zeros(0, np.int64), dtype=np.int64)
+        self.value = np.ascontiguousarray(np.concatenate(values) if values else np.zeros(0))
+        self._offsets = np.cumsum([0] + [v.size for v in values])
+        self.time_dependent = any(e is not None for e in expressions)
+        self.set_time(0.0)
+
+    def set_time(self, t: float) -> None:
+        if not self.time_dependent:
+            return
+        for i, (_, expression) in enumerate(self._blocks):
+            if expression is not None:
+                self.value[self._offsets[i]:self._offsets[i + 1]] = float(expression.evaluate(t=t))

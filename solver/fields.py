@@ -1,0 +1,53 @@
+"""Per-particle output fields, derived from the state only when a frame asks for them."""
+from __future__ import annotations
+
+import numpy as np
+
+VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))   # xx yy zz yz xz xy
+
+
+def voigt(stress: np.ndarray) -> np.ndarray:
+    return np.stack([stress[:, a, b] for a, b in VOIGT], axis=1)
+
+
+def pressure(stress: np.ndarray) -> np.ndarray:
+    """p = -tr(sigma)/3, positive in compression."""
+    return -np.trace(stress, axis1=1, axis2=2) / 3.0
+
+
+def von_mises(stress: np.ndarray) -> np.ndarray:
+    """sqrt(3/2 s:s) with s the deviatoric stress."""
+    dev = stress + pressure(stress)[:, None, None] * np.eye(3)
+    return np.sqrt(1.5 * np.einsum("pij,pij->p", dev, dev))
+
+
+def _strain_energy_density(sim) -> np.ndarray:
+    p = sim.particles
+    out = np.zeros(p.count)
+    for material, sl in sim.materials:
+        out[sl] = material.particle_strain_energy(p, sl) / p.volume[sl]
+    return out
+
+
+FIELDS = {
+    "position": lambda sim: sim.particles.x,
+    "velocity": lambda sim: sim.particles.v,
+    "stress": lambda sim: voigt(sim.particles.stress),
+    "mass": lambda sim: sim.particles.mass,
+    "volume": lambda sim: sim.particles.volume,
+    "density": lambda sim: sim.particles.mass / sim.particles.volume,
+    "pressure": lambda sim: pressure(sim.particles.stress),
+    "von_mises": lambda sim: von_mises(sim.particles.stress),
+    "velocity_magnitude": lambda sim: np.linalg.norm(sim.particles.v, axis=1),
+    "deformation_gradient": lambda sim: sim.particles.F.reshape(sim.particles.count, -1),
+    "strain_energy_density": _strain_energy_density,
+}
+
+
+def frame_fields(sim, names) -> dict[str, np.ndarray]:
+    """id, body, mass and position always; then every requested field."""
+    p = sim.particles
+    out = {"id": p.id, "body": p.body, "mass": p.mass, "position": p.x}
+    for name in names:
+        out[name] = np.ascontiguousarray(FIELDS[name](sim))
+    return out

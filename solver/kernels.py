@@ -1,0 +1,236 @@
+"""Numba kernels of the explicit MPM step, one per phase of the algorithm.
+
+All kernels work on the precomputed stencil of each particle (idx, w, dw: node
+index, weight and weight gradient, see solver/shape), so they are the same for
+every shape function and every dimension. Arrays are contiguous float64
+(int64 for indices); grid vectors are (n_nodes, dim), particle tensors
+(n, dim, dim), stresses always 3x3 (plane strain keeps sigma_zz).
+
+P2G scatters particle data to nodes and is written serially: each particle adds
+into the nodes of its stencil, and two particles may share a node.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def p2g(idx, w, dw, mass, vel, volume, stress, acc, grid_mass, grid_mom, grid_force):
+    """Mass, momentum and force to the grid (Algorithm 1, lines 8-12).
+
+    f_I = sum_p m_p phi_I b_p - V_p sigma_p . grad phi_I. `acc` is the body
+    acceleration per particle, or a single row shared by all (gravity only).
+    """
+    n, nk = w.shape
+    dim = vel.shape[1]
+    shared_acc = acc.shape[0] == 1
+    for p in range(n):
+        m = mass[p]
+        vol = volume[p]
+        ap = 0 if shared_acc else p
+        for k in range(nk):
+            node = idx[p, k]
+            mw = m * w[p, k]
+            grid_mass[node] += mw
+            for a in range(dim):
+                grid_mom[node, a] += mw * vel[p, a]
+                f = mw * acc[ap, a]
+                for b in range(dim):
+                    f -= vol * stress[p, a, b] * dw[p, k, b]
+                grid_force[node, a] += f
+
+
+@njit(cache=True)
+def p2g_mass_momentum(idx, w, mass, vel, grid_mass, grid_mom):
+    """Mass and momentum only (the first transfer of USF)."""
+    n, nk = w.shape
+    dim = vel.shape[1]
+    for p in range(n):
+        m = mass[p]
+        for k in range(nk):
+            node = idx[p, k]
+            mw = m * w[p, k]
+            grid_mass[node] += mw
+            for a in range(dim):
+                grid_mom[node, a] += mw * vel[p, a]
+
+
+@njit(cache=True)
+def p2g_force(idx, w, dw, mass, volume, stress, acc, grid_force):
+    """Internal and external nodal forces (USF computes them after the stress update)."""
+    n, nk = w.shape
+    dim = grid_force.shape[1]
+    shared_acc = acc.shape[0] == 1
+    for p in range(n):
+        m = mass[p]
+        vol = volume[p]
+        ap = 0 if shared_acc else p
+        for k in range(nk):
+            node = idx[p, k]
+            mw = m * w[p, k]
+            for a in range(dim):
+                f = mw * acc[ap, a]
+                for b in range(dim):
+                    f -= vol * stress[p, a, b] * dw[p, k, b]
+                grid_force[node, a] += f
+
+
+@njit(cache=True)
+def nodal_velocity(grid_mass, grid_mom, v):
+    """v_I = (mv)_I / m_I: a mass-weighted average of particle velocities, bounded
+    however small m_I is; 0 on nodes no particle touches."""
+    n_nodes, dim = v.shape
+    for node in range(n_nodes):
+        m = grid_mass[node]
+        for a in range(dim):
+            v[node, a] = grid_mom[node, a] / m if m > 0.0 else 0.0
+
+
+@njit(cache=True)
+def integrate_nodes(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new):
+    """v_I^t = (mv)_I / m_I and v~_I^{t+dt} = v_I^t + dt f_I / m_I.
+
+    The acceleration f_I / m_I is unbounded on nodes that a particle barely
+    touches (review 2.5.3, E24): below `mass_cutoff` it is dropped. This is the
+    cut-off of review eq. 2.63 applied to the acceleration rather than the
+    velocity, so that a rigid translation stays exact.
+    """
+    n_nodes, dim = v_old.shape
+    for node in range(n_nodes):
+        m = grid_mass[node]
+        for a in range(dim):
+            v = grid_mom[node, a] / m if m > 0.0 else 0.0
+            v_old[node, a] = v
+            v_new[node, a] = v + dt * grid_force[node, a] / m if m > mass_cutoff else v
+
+
+@njit(cache=True)
+def apply_dirichlet(bc_node, bc_axis, bc_value, grid_mass, v):
+    """Impose prescribed velocity components; returns the work the constraint does,
+    sum m_I (v_bar - v_free) v_bar, for the energy balance."""
+    work = 0.0
+    for i in range(bc_node.shape[0]):
+        node = bc_node[i]
+        a = bc_axis[i]
+        work += grid_mass[node] * (bc_value[i] - v[node, a]) * bc_value[i]
+        v[node, a] = bc_value[i]
+    return work
+
+
+@njit(cache=True)
+def g2p(idx, w, dt, flip_ratio, v_old, v_new, x, vel, mass, double_map, grid_mom_new):
+    """Particle velocity (PIC/FLIP blend, eq. 2.53) and position (eq. 2.54).
+
+    With `double_map` (MUSL) the updated particle momentum is mapped back to the
+    grid in the same pass (Algorithm 1, line 20): it uses the old weights too.
+    """
+    n, nk = w.shape
+    dim = vel.shape[1]
+    v_pic = np.zeros(dim)
+    dv = np.zeros(dim)
+    for p in range(n):
+        for a in range(dim):
+            v_pic[a] = 0.0
+            dv[a] = 0.0
+        for k in range(nk):
+            node = idx[p, k]
+            wk = w[p, k]
+            for a in range(dim):
+                v_pic[a] += wk * v_new[node, a]
+                dv[a] += wk * (v_new[node, a] - v_old[node, a])
+        for a in range(dim):
+            x[p, a] += dt * v_pic[a]
+            vel[p, a] = flip_ratio * (vel[p, a] + dv[a]) + (1.0 - flip_ratio) * v_pic[a]
+        if double_map:
+            m = mass[p]
+            for k in range(nk):
+                node = idx[p, k]
+                mw = m * w[p, k]
+                for a in range(dim):
+                    grid_mom_new[node, a] += mw * vel[p, a]
+
+
+@njit(cache=True)
+def update_kinematics(idx, dw, v_grid, dt, L, F, volume, volume0):
+    """L_p = sum_I v_I (x) grad phi_I, F <- (I + L dt) F, V = det(F) V0 (eq. 2.55).
+
+    Returns the index of the first particle whose J = det F is not positive
+    (the element has inverted: the run is unstable), or -1.
+    """
+    n, nk = idx.shape
+    dim = v_grid.shape[1]
+    F_old = np.empty((dim, dim))
+    bad = -1
+    for p in range(n):
+        for a in range(dim):
+            for b in range(dim):
+                s = 0.0
+                for k in range(nk):
+                    s += v_grid[idx[p, k], a] * dw[p, k, b]
+                L[p, a, b] = s
+        for a in range(dim):
+            for b in range(dim):
+                F_old[a, b] = F[p, a, b]
+        for a in range(dim):
+            for b in range(dim):
+                s = F_old[a, b]
+                for c in range(dim):
+                    s += dt * L[p, a, c] * F_old[c, b]
+                F[p, a, b] = s
+        J = determinant(F[p])
+        volume[p] = J * volume0[p]
+        if J <= 0.0 and bad < 0:
+            bad = p
+    return bad
+
+
+@njit(cache=True)
+def determinant(A):
+    dim = A.shape[0]
+    if dim == 1:
+        return A[0, 0]
+    if dim == 2:
+        return A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    return (A[0, 0] * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])
+            - A[0, 1] * (A[1, 0] * A[2, 2] - A[1, 2] * A[2, 0])
+            + A[0, 2] * (A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]))
+
+
+@njit(cache=True)
+def kinetic_energy(mass, vel):
+    e = 0.0
+    n, dim = vel.shape
+    for p in range(n):
+        s = 0.0
+        for a in range(dim):
+            s += vel[p, a] * vel[p, a]
+        e += 0.5 * mass[p] * s
+    return e
+
+
+@njit(cache=True)
+def max_speed_per_axis(vel):
+    n, dim = vel.shape
+    out = np.zeros(dim)
+    for p in range(n):
+        for a in range(dim):
+            s = abs(vel[p, a])
+            if s > out[a]:
+                out[a] = s
+    return out
+
+
+@njit(cache=True)
+def first_non_finite(x, vel, stress):
+    """Index of the first particle with a non-finite position, velocity or stress, or -1."""
+    n, dim = x.shape
+    for p in range(n):
+        for a in range(dim):
+            if not (np.isfinite(x[p, a]) and np.isfinite(vel[p, a])):
+                return p
+        for a in range(3):
+            for b in range(3):
+                if not np.isfinite(stress[p, a, b]):
+                    return p
+    return -1

@@ -1,0 +1,26 @@
+"""Shape (weighting) functions, registered by name.
+
+A shape function module provides `SUPPORT` (nodes per axis that a particle
+touches) and a numba kernel
+
+    weights(x, lower, inv_h, cells, strides, idx, w, dw) -> int
+
+filling, for every particle p and every node k of its stencil, the flat node
+index idx[p, k], the weight w[p, k] and the gradient dw[p, k, :]. It returns the
+index of the first particle outside the grid, or -1. The transfer kernels only
+ever see idx, w and dw, so they are the same for every shape function.
+"""
+from __future__ import annotations
+
+from types import ModuleType
+
+from solver.shape import linear
+
+REGISTRY: dict[str, ModuleType] = {"linear": linear}
+
+
+def get(name: str) -> ModuleType:
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise ValueError(f"shape function {name!r} is not implemented; known: {sorted(REGISTRY)}") from None

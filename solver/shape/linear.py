@@ -1,0 +1,49 @@
+"""Linear hat functions (review eq. 3.1-3.3, Karamelo eq. 2.1-2.4).
+
+In 1D N_I(x) = 1 - |x - x_I| / h on the two nodes of the cell holding x; in 2D
+and 3D the tensor product over axes. Their gradient jumps at cell faces, which
+is the cell-crossing noise of standard MPM (review 3.2).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+SUPPORT = 2  # nodes per axis
+
+
+@njit(cache=True)
+def weights(x, lower, inv_h, cells, strides, idx, w, dw):
+    n, dim = x.shape
+    nk = w.shape[1]
+    base = np.empty(dim, dtype=np.int64)
+    w1 = np.empty((dim, 2))   # 1D weights of the two nodes, per axis
+    g1 = np.empty((dim, 2))   # their derivatives
+    for p in range(n):
+        for a in range(dim):
+            s = (x[p, a] - lower[a]) * inv_h[a]
+            if not (s >= 0.0 and s <= cells[a]):   # also catches NaN
+                return p
+            i = min(int(s), cells[a] - 1)
+            f = s - i
+            base[a] = i
+            w1[a, 0] = 1.0 - f
+            w1[a, 1] = f
+            g1[a, 0] = -inv_h[a]
+            g1[a, 1] = inv_h[a]
+        for k in range(nk):
+            node = 0
+            wk = 1.0
+            for a in range(dim):
+                bit = (k >> a) & 1
+                node += (base[a] + bit) * strides[a]
+                wk *= w1[a, bit]
+            idx[p, k] = node
+            w[p, k] = wk
+            for d in range(dim):
+                g = 1.0
+                for a in range(dim):
+                    bit = (k >> a) & 1
+                    g *= g1[a, bit] if a == d else w1[a, bit]
+                dw[p, k, d] = g
+    return -1

@@ -1,0 +1,156 @@
+"""Struct-of-arrays state of particles and grid, allocated for what a scene needs."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from solver import materials
+from solver.expressions import compile_expression
+from solver.seeding import seed
+
+
+@dataclass
+class Particles:
+    """One contiguous array per particle quantity, particles sorted by material."""
+
+    x: np.ndarray          # (n, dim) current position
+    v: np.ndarray          # (n, dim) velocity
+    F: np.ndarray          # (n, dim, dim) deformation gradient
+    L: np.ndarray          # (n, dim, dim) velocity gradient of the last step
+    stress: np.ndarray     # (n, 3, 3) Cauchy stress
+    mass: np.ndarray       # (n,)
+    volume: np.ndarray     # (n,) current volume
+    volume0: np.ndarray    # (n,) reference volume
+    id: np.ndarray         # (n,) int64, stable over the run
+    body: np.ndarray       # (n,) int32, index into scene.bodies
+    X: np.ndarray | None = None   # (n, dim) reference position, only when a body force needs it
+
+    @property
+    def count(self) -> int:
+        return self.x.shape[0]
+
+    @property
+    def dimension(self) -> int:
+        return self.x.shape[1]
+
+
+@dataclass
+class Grid:
+    """A regular background grid; nodes are numbered with x fastest."""
+
+    lower: np.ndarray      # (dim,)
+    h: np.ndarray          # (dim,) cell sizes
+    cells: np.ndarray      # (dim,) int64 cells per axis
+    mass: np.ndarray       # (n_nodes,)
+    momentum: np.ndarray   # (n_nodes, dim)
+    force: np.ndarray      # (n_nodes, dim)
+    v_old: np.ndarray      # (n_nodes, dim) v_I^t
+    v_new: np.ndarray      # (n_nodes, dim) v~_I^{t+dt}, then v_I^{t+dt}
+    inv_h: np.ndarray = field(init=False)
+    strides: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        self.inv_h = 1.0 / self.h
+        nodes = self.cells + 1
+        self.strides = np.concatenate(([1], np.cumprod(nodes)[:-1])).astype(np.int64)
+
+    @property
+    def node_counts(self) -> np.ndarray:
+        return self.cells + 1
+
+    @property
+    def n_nodes(self) -> int:
+        return int(np.prod(self.node_counts))
+
+    def node_positions(self) -> np.ndarray:
+        """(n_nodes, dim) coordinates, in node order."""
+        axes = [self.lower[a] + self.h[a] * np.arange(self.cells[a] + 1) for a in range(len(self.h))]
+        mesh = np.meshgrid(*axes, indexing="ij")
+        # node order is x fastest: transpose the 'ij' mesh to (..., z, y, x) before flattening
+        return np.stack([m.transpose().ravel() for m in mesh], axis=1)
+
+    def reset(self) -> None:
+        self.mass.fill(0.0)
+        self.momentum.fill(0.0)
+        self.force.fill(0.0)
+
+
+@dataclass
+class Stencil:
+    """Per-particle node indices, weights and weight gradients of the shape function."""
+
+    idx: np.ndarray   # (n, nk) int64
+    w: np.ndarray     # (n, nk)
+    dw: np.ndarray    # (n, nk, dim)
+
+
+def make_grid(scene) -> Grid:
+    dim = scene.dimension
+    cells = np.asarray(scene.grid_shape(), dtype=np.int64)
+    n_nodes = int(np.prod(cells + 1))
+    return Grid(
+        lower=np.asarray(scene.grid.lower, dtype=np.float64),
+        h=np.asarray(scene.cell_sizes(), dtype=np.float64),
+        cells=cells,
+        mass=np.zeros(n_nodes),
+        momentum=np.zeros((n_nodes, dim)),
+        force=np.zeros((n_nodes, dim)),
+        v_old=np.zeros((n_nodes, dim)),
+        v_new=np.zeros((n_nodes, dim)),
+    )
+
+
+def make_stencil(n: int, dim: int, support: int) -> Stencil:
+    nk = support**dim
+    return Stencil(idx=np.zeros((n, nk), dtype=np.int64), w=np.zeros((n, nk)), dw=np.zeros((n, nk, dim)))
+
+
+def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
+    """Seed every body, sort particles by material, set mass and initial velocity.
+
+    Returns the particles and the slice of particles made of each material.
+    """
+    dim = scene.dimension
+    seeds = seed(scene)
+    material_of_body = np.array([list(scene.materials).index(b.material) for b in scene.bodies], dtype=np.int64)
+    order = np.argsort(material_of_body[seeds.body], kind="stable")
+    x = np.ascontiguousarray(seeds.position[order])
+    body = np.ascontiguousarray(seeds.body[order]).astype(np.int32)
+    volume0 = np.ascontiguousarray(seeds.volume[order])
+    n = x.shape[0]
+
+    density = np.array([scene.materials[b.material].density for b in scene.bodies])
+    mass = volume0 * density[body]
+    v = np.zeros((n, dim))
+    names = ("x", "y", "z")[:dim]
+    for b_index, b in enumerate(scene.bodies):
+        sel = body == b_index
+        if not sel.any():
+            continue
+        coords = {names[a]: x[sel, a] for a in range(dim)}
+        for a, component in enumerate(b.initial_velocity or []):
+            if isinstance(component, str):
+                v[sel, a] = compile_expression(component, names).evaluate(**coords)
+            elif component is not None:
+                v[sel, a] = component
+
+    F = np.zeros((n, dim, dim))
+    F[:, np.arange(dim), np.arange(dim)] = 1.0
+    particles = Particles(
+        x=x, v=v, F=F, L=np.zeros((n, dim, dim)), stress=np.zeros((n, 3, 3)),
+        mass=mass, volume=volume0.copy(), volume0=volume0,
+        id=np.arange(n, dtype=np.int64), body=body,
+    )
+
+    slices: dict[str, slice] = {}
+    sorted_material = material_of_body[body]
+    for m_index, name in enumerate(scene.materials):
+        where = np.flatnonzero(sorted_material == m_index)
+        if where.size:
+            slices[name] = slice(int(where[0]), int(where[-1]) + 1)
+    return particles, slices
+
+
+def make_materials(scene, slices: dict[str, slice]) -> list[tuple[object, slice]]:
+    return [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]

@@ -1,0 +1,179 @@
+"""The explicit update-Lagrangian MPM step: USL, MUSL and USF.
+
+Each `_step_*` method is the algorithm of the papers written as a sequence of
+kernels (solver/kernels.py); the line numbers refer to Algorithm 1 (MUSL) of the
+Karamelo paper, which is Algorithm 2 of the MPM review.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver import kernels, shape
+from solver.boundary import Constraints
+from solver.loads import BodyLoads
+from solver.state import make_grid, make_materials, make_particles, make_stencil
+
+# Nodes whose mass is below this fraction of the lightest particle's mass get no
+# acceleration (review eq. 2.63, see kernels.integrate_nodes). MUSL and USF take
+# L_p from bounded nodal velocities anyway; for USL this keeps L_p finite.
+MASS_CUTOFF_FRACTION = 1e-9
+
+
+class Instability(RuntimeError):
+    """The run cannot go on: names the step, the particle (by id) and the quantity."""
+
+    def __init__(self, step: int, time: float, particle_id: int | None, quantity: str, detail: str):
+        self.step, self.time, self.particle_id, self.quantity = step, time, particle_id, quantity
+        who = f"particle {particle_id}" if particle_id is not None else "the system"
+        super().__init__(f"unstable at step {step} (t = {time:.6g}): {quantity} of {who}: {detail}")
+
+
+@dataclass
+class Energies:
+    kinetic: float
+    strain: float
+    external_work: float
+    boundary_work: float
+
+    @property
+    def total(self) -> float:
+        return self.kinetic + self.strain
+
+
+class ExplicitMPM:
+    """Particles, grid and the step of one scene."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        method = scene.method
+        self.particles, slices = make_particles(scene)
+        self.materials = make_materials(scene, slices)
+        self.grid = make_grid(scene)
+        self.shape = shape.get(method.shape_function)
+        self.stencil = make_stencil(self.particles.count, scene.dimension, self.shape.SUPPORT)
+        self.constraints = Constraints(scene, self.grid)
+        self.loads = BodyLoads(scene)
+        if self.loads.needs_reference:
+            self.particles.X = self.particles.x.copy()
+        self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
+        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.particles.mass.min()) if self.particles.count else 0.0
+        self.wave_speed = max(m.wave_speed for m, _ in self.materials) if self.materials else 0.0
+        self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
+        self.time = 0.0
+        self.step_count = 0
+        self.external_work = 0.0
+        self.boundary_work = 0.0
+
+    # -- the step ---------------------------------------------------------------
+
+    def advance(self, dt: float) -> None:
+        """One explicit step of size dt; raises Instability when the state breaks down."""
+        self.constraints.set_time(self.time + dt)
+        self._step(dt)
+        self._account_external_work(dt)
+        self.time += dt
+        self.step_count += 1
+
+    def _step_musl(self, dt: float) -> None:
+        p, g, s = self.particles, self.grid, self.stencil
+        self._interpolation_weights()                                   # phi_I(x_p), grad phi_I(x_p)
+        g.reset()
+        acc = self.loads.acceleration(p, self.time)
+        kernels.p2g(s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
+                    g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
+                                self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17: v_I^t, v~_I^{t+dt}
+        self._impose(g.v_old)                                           # line 15
+        self.boundary_work += self._impose(g.v_new)
+        g.momentum.fill(0.0)
+        kernels.g2p(s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
+                    p.x, p.v, p.mass, True, g.momentum)                 # lines 18-20: x_p, v_p, (mv)_I again
+        kernels.nodal_velocity(g.mass, g.momentum, g.v_new)   # line 24: v_I^{t+dt}
+        self._impose(g.v_new)                                           # line 21
+        self._update_stress(dt, g.v_new)                                # lines 25-28: L, F, V, sigma
+
+    def _step_usl(self, dt: float) -> None:
+        p, g, s = self.particles, self.grid, self.stencil
+        self._interpolation_weights()
+        g.reset()
+        acc = self.loads.acceleration(p, self.time)
+        kernels.p2g(s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
+        self._impose(g.v_old)
+        self.boundary_work += self._impose(g.v_new)
+        kernels.g2p(s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
+                    p.x, p.v, p.mass, False, g.momentum)                # particles from v_I^{t+dt}
+        self._update_stress(dt, g.v_new)                                # stress last, from v_I^{t+dt}
+
+    def _step_usf(self, dt: float) -> None:
+        p, g, s = self.particles, self.grid, self.stencil
+        self._interpolation_weights()
+        g.reset()
+        kernels.p2g_mass_momentum(s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+        kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
+        self._impose(g.v_old)
+        self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
+        acc = self.loads.acceleration(p, self.time)
+        kernels.p2g_force(s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
+        self._impose(g.v_old)
+        self.boundary_work += self._impose(g.v_new)
+        kernels.g2p(s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
+                    p.x, p.v, p.mass, False, g.momentum)
+
+    # -- phases -----------------------------------------------------------------
+
+    def _interpolation_weights(self) -> None:
+        p, g, s = self.particles, self.grid, self.stencil
+        outside = self.shape.weights(p.x, g.lower, g.inv_h, g.cells, g.strides, s.idx, s.w, s.dw)
+        if outside >= 0:
+            self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _impose(self, v: np.ndarray) -> float:
+        c = self.constraints
+        return kernels.apply_dirichlet(c.node, c.axis, c.value, self.grid.mass, v)
+
+    def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
+        p, s = self.particles, self.stencil
+        inverted = kernels.update_kinematics(s.idx, s.dw, v_grid, dt, p.L, p.F, p.volume, p.volume0)
+        if inverted >= 0:
+            J = float(np.linalg.det(p.F[inverted]))
+            self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")
+        for material, sl in self.materials:
+            material.update_stress(p, sl, dt)
+
+    def _account_external_work(self, dt: float) -> None:
+        if not self.loads.any:
+            return
+        p = self.particles
+        acc = self.loads.acceleration(p, self.time)
+        self.external_work += dt * float(np.sum(p.mass[:, None] * acc * p.v))
+
+    def _fail(self, index: int, quantity: str, detail: str) -> None:
+        raise Instability(self.step_count + 1, self.time, int(self.particles.id[index]), quantity, detail)
+
+    # -- diagnostics ------------------------------------------------------------
+
+    def stable_time_step(self, cfl: float) -> float:
+        """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73)."""
+        speed = self.wave_speed + kernels.max_speed_per_axis(self.particles.v)
+        return float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300)))
+
+    def energies(self) -> Energies:
+        p = self.particles
+        strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
+        return Energies(kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work)
+
+    def check_finite(self) -> None:
+        p = self.particles
+        bad = kernels.first_non_finite(p.x, p.v, p.stress)
+        if bad >= 0:
+            for name, array in (("position", p.x), ("velocity", p.v), ("stress", p.stress)):
+                if not np.all(np.isfinite(array[bad])):
+                    self._fail(bad, name, "is not finite")
+
+    def energy_scale(self) -> float:
+        """sum_p m_p c^2: the energy of the bodies strained to order one, a floor for growth checks."""
+        return float(np.sum(self.particles.mass)) * self.wave_speed**2
