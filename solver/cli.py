@@ -1,0 +1,300 @@
+"""The ``mpm`` command line: run, validate, preview, examples, and sub-commands of other packages.
+
+Other packages add sub-commands through the entry-point group ``mpm.commands``:
+each entry point is ``register(subparsers) -> None``, which adds a parser and
+``set_defaults(func=handler)``; ``handler(args)`` returns the exit code. They are
+loaded only when the command line needs them (help, or one of their commands),
+and one that fails to load is reported without breaking the others.
+
+Exit codes of ``mpm run``: 0 complete, 2 invalid scene (every error printed as
+``path: message`` on stderr), 3 the run ended early (unstable, cancelled,
+max_steps: the diagnostic is printed on stderr).
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import numbers
+import sys
+from importlib.metadata import entry_points
+from pathlib import Path
+from typing import Any, Callable
+
+from solver.progress import ProgressBar, format_duration
+
+ENTRY_POINT_GROUP = "mpm.commands"
+EXIT_OK, EXIT_ERROR, EXIT_INVALID, EXIT_PARTIAL = 0, 1, 2, 3
+
+
+# -- helpers -----------------------------------------------------------------
+
+
+def _plain(obj: Any) -> dict[str, Any]:
+    """A dataclass / pydantic model / dict as a JSON-ready dict (non-finite numbers -> null)."""
+    if hasattr(obj, "model_dump"):
+        data = obj.model_dump(mode="json")
+    elif dataclasses.is_dataclass(obj):
+        data = dataclasses.asdict(obj)
+    else:
+        data = dict(obj)
+
+    def clean(value):
+        if isinstance(value, dict):
+            return {key: clean(item) for key, item in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [clean(item) for item in value]
+        if value is None or isinstance(value, (str, bool)):
+            return value
+        if isinstance(value, numbers.Integral):  # numpy integers too
+            return int(value)
+        if isinstance(value, numbers.Real):
+            return float(value) if math.isfinite(value) else None
+        return str(value)  # paths
+
+    return clean(data)
+
+
+def _print_scene_errors(source: str, error) -> None:
+    errors = error.errors
+    print(f"mpm: {source}: {len(errors)} validation error(s)", file=sys.stderr)
+    for item in errors:
+        print(f"{item['path'] or '(scene)'}: {item['message']}", file=sys.stderr)
+
+
+def _load(path: str, processes: int | None = None):
+    """The validated scene of a file, with ``parallel.processes`` overridden; None after printing errors."""
+    from solver.scene import SceneError, load_scene
+
+    try:
+        scene = load_scene(Path(path))
+        if processes is not None:
+            data = scene.model_dump(mode="json")
+            data["parallel"] = {**(data.get("parallel") or {}), "processes": processes}
+            scene = load_scene(data)
+    except SceneError as error:
+        _print_scene_errors(path, error)
+        return None
+    return scene
+
+
+def human_bytes(count: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if abs(count) < 1024 or unit == "TiB":
+            return f"{count:.0f} {unit}" if unit == "B" else f"{count:.1f} {unit}"
+        count /= 1024
+    raise AssertionError("unreachable")
+
+
+def human_seconds(seconds: float) -> str:
+    return f"{seconds:.2g} s" if seconds < 60 else format_duration(seconds)
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+# -- mpm run -----------------------------------------------------------------
+
+
+def register_run(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "run", help="run a scene locally (no server)",
+        description="Run a scene here and write result.h5, result.xdmf and preview.png.",
+    )
+    parser.add_argument("scene", help="scene file (JSON)")
+    parser.add_argument("-o", "--output", metavar="DIR", help="output folder (default: out/<scene file name>)")
+    parser.add_argument("-n", "--processes", type=_positive_int, metavar="K",
+                        help="processes to run on (sets parallel.processes)")
+    parser.add_argument("--progress", choices=("bar", "json", "none"), default="bar",
+                        help="bar: a progress line; json: one JSON object per update (for programs); none")
+    parser.set_defaults(func=cmd_run)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    scene = _load(args.scene, args.processes)
+    if scene is None:
+        return EXIT_INVALID
+    out_dir = Path(args.output) if args.output else Path("out") / Path(args.scene).stem
+    from solver import run  # numba and the kernels load only for a run
+
+    progress: Callable[[Any], None] | None = None
+    bar = ProgressBar() if args.progress == "bar" else None
+    if bar is not None:
+        progress = bar.update
+    elif args.progress == "json":
+        def progress(info: Any) -> None:
+            print(json.dumps({"event": "progress", **_plain(info)}), flush=True)
+
+    result = run(scene, out_dir, progress=progress)
+    if bar is not None:
+        bar.close()
+    done = _plain(result)
+    if args.progress == "json":
+        print(json.dumps({"event": "done", **done}), flush=True)
+    else:
+        print(
+            f"{done['status']}: {done['steps']} steps, t = {done['time']:.6g} "
+            f"in {human_seconds(done['wall_seconds'])} -> {done['result_path']}"
+        )
+    if done["status"] == "complete":
+        return EXIT_OK
+    print(f"mpm run: the run ended early ({done['reason']}): {done['message']}", file=sys.stderr)
+    return EXIT_PARTIAL
+
+
+# -- mpm validate ------------------------------------------------------------
+
+
+def register_validate(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "validate", help="check a scene and print what it will cost",
+        description="Validate a scene; print its particles, grid nodes, steps, memory and run time, "
+                    "or every error with its path.",
+    )
+    parser.add_argument("scene", help="scene file (JSON)")
+    parser.set_defaults(func=cmd_validate)
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    scene = _load(args.scene)
+    if scene is None:
+        return EXIT_INVALID
+    from solver.summary import summarize
+
+    summary = summarize(scene)
+    bodies = ", ".join(
+        f"{body.name} {count:,}" for body, count in zip(scene.bodies, summary.particles_per_body)
+    )
+    rows = [
+        ("particles", f"{summary.particles:,}  ({bodies})"),
+        ("grid nodes", f"{summary.grid_nodes:,}  ({' x '.join(map(str, summary.grid_shape))} cells)"),
+        ("time step", f"{summary.dt:.6g}" + ("" if scene.time.dt else "  (adaptive, estimated)")),
+        ("estimated steps", f"{summary.estimated_steps:,}"),
+        ("memory", human_bytes(summary.memory_bytes)),
+        ("estimated run time", human_seconds(summary.estimated_run_seconds)),
+    ]
+    print(f"{args.scene}: valid {scene.dimension}D scene {scene.name!r}")
+    for label, value in rows:
+        print(f"  {label:<20}{value}")
+    return EXIT_OK
+
+
+# -- mpm preview -------------------------------------------------------------
+
+
+def register_preview(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "preview", help="render a frame of a result file as PNG",
+        description="Render one frame of result.h5, particles coloured by a field.",
+    )
+    parser.add_argument("result", help="result file (result.h5)")
+    parser.add_argument("--frame", type=int, default=-1, help="frame index; negative counts from the end (default -1)")
+    parser.add_argument("--field", help="field to colour by (default: the scene's preview field)")
+    parser.add_argument("-o", "--output", metavar="PNG",
+                        help="image file (default: preview-<frame>[-<field>].png beside the result)")
+    parser.set_defaults(func=cmd_preview)
+
+
+def cmd_preview(args: argparse.Namespace) -> int:
+    from solver.preview import render_preview
+
+    result = Path(args.result)
+    if args.output:
+        out = Path(args.output)
+    else:
+        frame = "last" if args.frame == -1 else str(args.frame)
+        out = result.parent / f"preview-{frame}{'-' + args.field if args.field else ''}.png"
+    try:
+        render_preview(result, frame=args.frame, field=args.field, out=out)
+    except (OSError, ValueError, IndexError) as error:
+        print(f"mpm preview: error: {error}", file=sys.stderr)
+        return EXIT_ERROR
+    print(out)
+    return EXIT_OK
+
+
+# -- mpm examples ------------------------------------------------------------
+
+
+def register_examples(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "examples", help="list the built-in example scenes, or print one",
+        description="Without NAME: list the examples. With NAME: print that scene as JSON "
+                    "(mpm examples two_disks > two_disks.json).",
+    )
+    parser.add_argument("name", nargs="?", help="example to print")
+    parser.set_defaults(func=cmd_examples)
+
+
+def cmd_examples(args: argparse.Namespace) -> int:
+    from solver.examples import ExampleNotFound, list_examples, load_example
+
+    if args.name:
+        try:
+            print(json.dumps(load_example(args.name), indent=2))
+        except ExampleNotFound as error:
+            print(f"mpm examples: error: {error}", file=sys.stderr)
+            return EXIT_ERROR
+        return EXIT_OK
+    examples = list_examples()
+    width = max((len(example["name"]) for example in examples), default=4)
+    print(f"{'NAME':<{width}}  DIM  TITLE")
+    for example in examples:
+        print(f"{example['name']:<{width}}  {example['dimension']}D   {example['title']}")
+    return EXIT_OK
+
+
+# -- the command -------------------------------------------------------------
+
+BUILTINS = {
+    "run": register_run,
+    "validate": register_validate,
+    "preview": register_preview,
+    "examples": register_examples,
+}
+
+
+def _load_plugins(subparsers, only: str | None) -> None:
+    """Add the sub-commands of the entry-point group (``only``: just that one when it exists)."""
+    plugins = [ep for ep in entry_points(group=ENTRY_POINT_GROUP) if ep.name not in subparsers.choices]
+    if only is not None and any(ep.name == only for ep in plugins):
+        plugins = [ep for ep in plugins if ep.name == only]
+    for ep in sorted(plugins, key=lambda ep: ep.name):
+        if ep.name in subparsers.choices:  # an installed package declared it twice
+            continue
+        try:
+            ep.load()(subparsers)
+        except Exception as error:  # a broken plugin must not break the other commands
+            print(
+                f"mpm: warning: command {ep.name!r} is unavailable ({ep.value}): "
+                f"{type(error).__name__}: {error}",
+                file=sys.stderr,
+            )
+
+
+def build_parser(argv: list[str]) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mpm", description="Material point method simulations: run, validate, preview, serve.",
+    )
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for register in BUILTINS.values():
+        register(subparsers)
+    command = next((arg for arg in argv if not arg.startswith("-")), None)
+    if command not in BUILTINS:
+        _load_plugins(subparsers, only=command)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
+    args = parser.parse_args(argv)
+    if getattr(args, "func", None) is None:
+        parser.print_help(sys.stderr)
+        return EXIT_INVALID
+    return int(args.func(args) or 0)

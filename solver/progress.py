@@ -1,0 +1,98 @@
+"""A single-line terminal progress bar for ``mpm run`` (no dependencies).
+
+On a terminal the line is redrawn in place (``\\r``) at most 4 times a second::
+
+    [##########----------]  50.0%  step 1750  t 1.75/3.5  2104 steps/s  ETA 0:01
+
+When the output is not a terminal (a log file, CI) a plain line is printed
+every few seconds instead. :meth:`ProgressBar.close` prints the last state and
+ends the line.
+"""
+from __future__ import annotations
+
+import math
+import shutil
+import sys
+import time
+from typing import Any, TextIO
+
+
+def format_duration(seconds: float | None) -> str:
+    """``75 -> "1:15"``, ``3725 -> "1:02:05"``; ``"?"`` when unknown."""
+    if seconds is None or not math.isfinite(seconds) or seconds < 0:
+        return "?"
+    minutes, secs = divmod(int(round(seconds)), 60)
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
+
+
+class ProgressBar:
+    """Draws progress updates (objects or dicts with the ProgressInfo fields).
+
+    Reads ``fraction``, ``step``, ``time``, ``end_time``, ``steps_per_second``
+    and ``eta_seconds``.
+    """
+
+    def __init__(
+        self,
+        stream: TextIO | None = None,
+        min_interval: float = 0.25,
+        plain_interval: float = 5.0,
+        clock=time.monotonic,
+    ) -> None:
+        self.stream = stream or sys.stdout
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.interval = min_interval if self.tty else plain_interval
+        self.clock = clock
+        self._last_draw: float | None = None
+        self._last_line = ""
+        self._pending: str | None = None
+
+    def update(self, info: Any) -> None:
+        """Record an update; draw it unless the last drawing is too recent."""
+        line = self.format(info)
+        now = self.clock()
+        if self._last_draw is not None and now - self._last_draw < self.interval:
+            self._pending = line
+            return
+        self._draw(line)
+        self._last_draw = now
+
+    def close(self) -> None:
+        """Draw the last state (if not shown yet) and end the line."""
+        if self._pending is not None:
+            self._draw(self._pending)
+        if self.tty and self._last_line:
+            self.stream.write("\n")
+            self.stream.flush()
+
+    def format(self, info: Any) -> str:
+        def get(name: str):
+            return info.get(name) if isinstance(info, dict) else getattr(info, name, None)
+
+        fraction = min(max(float(get("fraction") or 0.0), 0.0), 1.0)
+        rate = get("steps_per_second")
+        parts = [
+            f"{100 * fraction:5.1f}%",
+            f"step {get('step') or 0}",
+            f"t {float(get('time') or 0.0):.4g}/{float(get('end_time') or 0.0):.4g}",
+            f"{rate:.0f} steps/s" if rate else "- steps/s",
+            f"ETA {format_duration(get('eta_seconds'))}",
+        ]
+        text = "  ".join(parts)
+        if not self.tty:
+            return text
+        width = shutil.get_terminal_size((80, 24)).columns
+        bar_width = max(10, min(40, width - len(text) - 4))
+        filled = int(round(bar_width * fraction))
+        return f"[{'#' * filled}{'-' * (bar_width - filled)}] {text}"[: width - 1]
+
+    def _draw(self, line: str) -> None:
+        if self.tty:
+            # Pad so a shorter line fully covers the previous one.
+            self.stream.write("\r" + line.ljust(len(self._last_line)))
+        else:
+            self.stream.write(line + "\n")
+        self.stream.flush()
+        self._last_line = line
+        self._pending = None
