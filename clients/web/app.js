@@ -72,8 +72,19 @@
     return `${value.toFixed(unit ? 1 : 0)} ${units[unit]}`;
   }
 
+  /** A timestamp as "14:03:27" today, "May 2, 14:03" before. */
   function fmtTime(iso) {
-    return iso ? new Date(iso).toLocaleString() : "–";
+    if (!iso) return "–";
+    const date = new Date(iso);
+    if (date.toDateString() === new Date().toDateString()) return date.toLocaleTimeString([], { hour12: false });
+    return date.toLocaleString([], { month: "short", day: "numeric", hour: "2-digit", minute: "2-digit", hour12: false });
+  }
+
+  /** Wall time of a job: started to finished, or to now while it runs. */
+  function wallSeconds(record) {
+    if (!record.started_at) return null;
+    const end = record.finished_at ? Date.parse(record.finished_at) : Date.now();
+    return (end - Date.parse(record.started_at)) / 1000;
   }
 
   function badge(status) {
@@ -84,7 +95,7 @@
     const percent = Math.round(Math.min(1, Math.max(0, record.progress || 0)) * 1000) / 10;
     return h("div", { class: `progress ${record.status}`, role: "progressbar", "aria-valuenow": percent,
                       "aria-valuemin": 0, "aria-valuemax": 100 },
-      h("div", { class: "progress-fill", style: `width: ${percent}%` }),
+      h("div", { class: "progress-track" }, h("div", { class: "progress-fill", style: `width: ${percent}%` })),
       h("span", { class: "progress-label" }, `${percent.toFixed(1)}%`));
   }
 
@@ -262,6 +273,11 @@
       const label = key === null ? [] : [h("span", { class: "j-key" }, JSON.stringify(key)), ": "];
       paths.add(path);
       if (value !== null && typeof value === "object") {
+        if (Array.isArray(value) && value.length <= 8 && value.every((v) => v === null || typeof v !== "object")) {
+          const items = value.flatMap((v, i) => (i ? [", ", scalar(v)] : [scalar(v)]));
+          lines.push([path, [indent(depth), ...label, "[", ...items, "]" + comma]]);  // [x, y] on one line
+          return;
+        }
         const entries = Array.isArray(value) ? value.map((v, i) => [i, v]) : Object.entries(value);
         const [open, close] = Array.isArray(value) ? ["[", "]"] : ["{", "}"];
         if (!entries.length) {
@@ -296,6 +312,24 @@
         h("span", { class: "code" }, parts),
         messages.map((message) => h("span", { class: "field-error" }, message)));
     }));
+  }
+
+  /** JSON text indented by two, with short arrays of numbers on one line (`"lower": [-0.5, -0.5]`). */
+  function formatJson(value, depth = 0) {
+    const pad = "  ".repeat(depth + 1), end = "  ".repeat(depth);
+    if (Array.isArray(value)) {
+      if (value.length <= 8 && value.every((v) => v === null || typeof v !== "object")) {
+        return `[${value.map((v) => JSON.stringify(v)).join(", ")}]`;
+      }
+      return value.length ? `[\n${value.map((v) => pad + formatJson(v, depth + 1)).join(",\n")}\n${end}]` : "[]";
+    }
+    if (value !== null && typeof value === "object") {
+      const entries = Object.entries(value);
+      return entries.length
+        ? `{\n${entries.map(([k, v]) => `${pad}${JSON.stringify(k)}: ${formatJson(v, depth + 1)}`).join(",\n")}\n${end}}`
+        : "{}";
+    }
+    return JSON.stringify(value);
   }
 
   // ---------------------------------------------------------------- energy plot (SVG)
@@ -352,6 +386,8 @@
         h("line", { class: "axis", x1: left, x2: W - right, y1: H - bottom, y2: H - bottom }),
         h("line", { class: "axis", x1: left, x2: left, y1: top, y2: H - bottom }),
         h("text", { class: "axis-label", x: (left + W - right) / 2, y: H - 4, "text-anchor": "middle" }, "time"),
+        h("text", { class: "axis-label", x: 14, y: (top + H - bottom) / 2, "text-anchor": "middle",
+                    transform: `rotate(-90 14 ${(top + H - bottom) / 2})` }, "energy"),
         lines),
       h("figcaption", { class: "legend" }, present.map(([key, label, colour]) =>
         h("span", { class: "legend-item" }, h("i", { style: `background: ${colour}` }), label))));
@@ -483,8 +519,8 @@
         ["ETA", running ? fmtDuration(record.eta_seconds) : "–"],
         ["Particles", fmtInteger(summary.particles)],
         ["Grid nodes", fmtInteger(summary.grid_nodes)],
-        ["Created", fmtTime(record.created_at)],
-        ["Finished", fmtTime(record.finished_at)],
+        ["Started", fmtTime(record.started_at)],
+        ["Wall time", fmtDuration(wallSeconds(record))],
       ];
       stats.replaceChildren(...rows.map(([k, v]) => h("div", {}, h("dt", {}, k), h("dd", {}, v))));
       errorBox.hidden = !record.error;
@@ -624,7 +660,7 @@
   /** Where JSON.parse failed, as "line L, column C" (Chromium says "at position N" or "(line L column C)"). */
   function parseErrorText(text, error) {
     const position = /position (\d+)/.exec(error.message);
-    if (!position) return error.message;
+    if (!position || /line \d+/.test(error.message)) return error.message;
     const before = text.slice(0, Number(position[1]));
     const line = before.split("\n").length;
     const column = before.length - before.lastIndexOf("\n");
@@ -660,7 +696,7 @@
     async function pickExample() {
       if (!examples.value) return;
       const scene = await api(`v1/examples/${encodeURIComponent(examples.value)}`);
-      setText(JSON.stringify(scene, null, 2));
+      setText(formatJson(scene));
     }
 
     async function pickFile() {
