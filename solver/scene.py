@@ -1,0 +1,884 @@
+"""The scene: pydantic models of the whole contract in SCENE.md, and ``load_scene``.
+
+Validation happens in two passes, both reporting every problem they find:
+
+1. the structure: types, ranges, unknown keys, expression syntax, and the rules
+   that concern one part of the scene (a box's upper corner above its lower one,
+   the fixed time step against ``max_steps``, features the solver does not
+   implement yet);
+2. once the structure is valid, the rules that tie parts together (vector lengths
+   against ``dimension``, material names, bodies inside the grid, ...).
+
+Features of the contract that the solver does not implement yet (see
+``solver.capabilities``) are rejected with "... is not supported yet" at the
+field's path. The capability sets are read at validation time, so implementing a
+feature only edits ``capabilities.py``.
+"""
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import numpy as np
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PlainValidator,
+    Strict,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+from solver import capabilities
+from solver import geometry as geometry_shapes
+from solver.expressions import ExpressionError, compile_expression
+
+# Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
+SPACE_VARIABLES = ("x", "y", "z")
+TIME_VARIABLES = ("t",)
+BODY_FORCE_VARIABLES = ("x", "y", "z", "X", "Y", "Z", "t")
+_AXIS_OF_VARIABLE = {"x": 0, "y": 1, "z": 2, "X": 0, "Y": 1, "Z": 2}
+
+# Every output field name of the contract; the solver writes those listed in
+# capabilities.OUTPUT_FIELDS (id, body and mass are always written).
+CONTRACT_OUTPUT_FIELDS = frozenset({
+    "position", "velocity", "stress", "mass", "volume", "density", "pressure",
+    "plastic_strain", "damage", "temperature", "velocity_magnitude", "von_mises",
+    "deformation_gradient", "strain_energy_density",
+})
+
+WALL_FACES = ("x-", "x+", "y-", "y+", "z-", "z+")
+
+
+# --------------------------------------------------------------------------- errors
+
+class SceneError(ValueError):
+    """An invalid scene. ``errors`` lists every problem as ``{"path", "message"}``."""
+
+    def __init__(self, errors: list[dict[str, str]]):
+        self.errors = errors
+        super().__init__("\n".join(f"{e['path']}: {e['message']}" if e["path"] else e["message"] for e in errors))
+
+
+def _error(message: str) -> PydanticCustomError:
+    # "{detail}" keeps braces inside the message (e.g. quoted user text) literal.
+    return PydanticCustomError("scene_error", "{detail}", {"detail": message})
+
+
+def _problems(problems: list[tuple[str, str]]) -> PydanticCustomError:
+    """Several problems at paths relative to the model that raises them."""
+    detail = "; ".join(f"{path}: {message}" if path else message for path, message in problems)
+    return PydanticCustomError("scene_problems", "{detail}", {"detail": detail, "problems": problems})
+
+
+def _require_supported(value: Any, capability: str) -> Any:
+    if value not in getattr(capabilities, capability):
+        raise _error(f"{value!r} is not supported yet")
+    return value
+
+
+# --------------------------------------------------------------------------- value types
+
+def _fmt(value: float) -> str:
+    return f"{value:g}"
+
+
+def _finite_number(value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _error("must be a number")
+    if not math.isfinite(value):
+        raise _error("must be a finite number")
+    return float(value)
+
+
+def _number_or_expression(variables: tuple[str, ...]):
+    """A number, or an expression string over ``variables`` (checked when read)."""
+
+    def validate(value: Any) -> float | str:
+        if isinstance(value, str):
+            try:
+                compile_expression(value, variables)
+            except ExpressionError as exc:
+                raise _error(f"invalid expression {value!r}: {exc}") from None
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise _error(f"must be a number or an expression string in {', '.join(variables)}")
+        return _finite_number(value)
+
+    return Annotated[Union[float, str], PlainValidator(validate, json_schema_input_type=Union[float, str])]
+
+
+def _cell_size(value: Any) -> float | list[float]:
+    if isinstance(value, (list, tuple)):
+        if not value:
+            raise _error("must not be empty")
+        sizes = [_finite_number(v) for v in value]
+        if any(size <= 0 for size in sizes):
+            raise _error(f"every cell size must be > 0, got {value}")
+        return sizes
+    size = _finite_number(value)
+    if size <= 0:
+        raise _error("must be > 0")
+    return size
+
+
+def _energies(value: Any) -> bool | int:
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int) and value >= 1:
+        return value
+    raise _error("must be true, false or a whole number of steps >= 1")
+
+
+Real = Annotated[float, Strict()]  # ints are accepted, booleans and strings are not
+Integer = Annotated[int, Strict()]
+Boolean = Annotated[bool, Strict()]
+Positive = Annotated[float, Strict(), Field(gt=0)]
+NonNegative = Annotated[float, Strict(), Field(ge=0)]
+Vector = Annotated[list[Real], Field(min_length=1, max_length=3)]
+SpaceValue = _number_or_expression(SPACE_VARIABLES)
+TimeValue = _number_or_expression(TIME_VARIABLES)
+BodyForceValue = _number_or_expression(BODY_FORCE_VARIABLES)
+CellSize = Annotated[
+    Union[float, list[float]],
+    PlainValidator(_cell_size, json_schema_input_type=Union[Positive, list[Positive]]),
+]
+Energies = Annotated[
+    Union[bool, int],
+    PlainValidator(_energies, json_schema_input_type=Union[bool, Annotated[int, Field(ge=1)]]),
+]
+
+
+class _Model(BaseModel):
+    # Every model of the scene: unknown keys are errors, NaN and infinity too.
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+def _upper_above_lower(upper: list[float] | None, info: ValidationInfo) -> list[float] | None:
+    """Field validator of ``upper`` (declared after ``lower``) in boxes and the grid."""
+    lower = info.data.get("lower")
+    if upper is None or lower is None:
+        return upper
+    if len(lower) != len(upper):
+        raise _error(f"has {len(upper)} components but lower has {len(lower)}")
+    problems = [(f"[{i}]", f"must be > lower[{i}] = {_fmt(lo)}") for i, (lo, up) in enumerate(zip(lower, upper)) if not up > lo]
+    if problems:
+        raise _problems(problems)
+    return upper
+
+
+# --------------------------------------------------------------------------- method, grid
+
+class Method(_Model):
+    formulation: Literal["ulmpm", "tlmpm"] = "ulmpm"
+    scheme: Literal["musl", "usl", "usf"] = "musl"
+    shape_function: Literal["linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein"] = "linear"
+    transfer: Literal["flip", "pic", "apic"] = "flip"
+    flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
+
+    @field_validator("formulation")
+    @classmethod
+    def _formulation_supported(cls, value: str) -> str:
+        return _require_supported(value, "FORMULATIONS")
+
+    @field_validator("scheme")
+    @classmethod
+    def _scheme_supported(cls, value: str) -> str:
+        return _require_supported(value, "SCHEMES")
+
+    @field_validator("shape_function")
+    @classmethod
+    def _shape_function_allowed(cls, value: str, info: ValidationInfo) -> str:
+        # Bernstein functions are only C0 across cells: [R] 3.5 recommends them for TLMPM only.
+        if value == "bernstein" and info.data.get("formulation") == "ulmpm":
+            raise _error("'bernstein' is only supported with formulation 'tlmpm'")
+        return _require_supported(value, "SHAPE_FUNCTIONS")
+
+    @field_validator("transfer")
+    @classmethod
+    def _transfer_supported(cls, value: str) -> str:
+        return _require_supported(value, "TRANSFERS")
+
+
+class Grid(_Model):
+    """The background grid. ``lower``/``upper`` may be left out only with tlmpm; the
+    grid then covers the bodies' bounding box padded by two cells."""
+
+    lower: Vector | None = None
+    upper: Vector | None = None
+    cell_size: CellSize
+
+    _upper = field_validator("upper")(_upper_above_lower)
+
+
+# --------------------------------------------------------------------------- materials
+
+class _Material(_Model):
+    @field_validator("model", check_fields=False)
+    @classmethod
+    def _model_supported(cls, value: str) -> str:
+        return _require_supported(value, "MATERIAL_MODELS")
+
+    def dilatational_wave_speed(self) -> float | None:
+        """Speed of the fastest wave, for the adaptive time step; None when the
+        material alone does not determine it."""
+        return None
+
+
+class _ElasticMaterial(_Material):
+    """Isotropic elastic constants shared by the solid models."""
+
+    density: Positive
+    youngs_modulus: Positive
+    poisson_ratio: Annotated[float, Strict(), Field(ge=0, lt=0.5)]
+
+    def lame_parameters(self) -> tuple[float, float]:
+        """(lambda, mu) from Young's modulus and Poisson's ratio."""
+        e, nu = self.youngs_modulus, self.poisson_ratio
+        return e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        return self.youngs_modulus / (3 * (1 - 2 * self.poisson_ratio))
+
+    @property
+    def shear_modulus(self) -> float:
+        return self.lame_parameters()[1]
+
+    def dilatational_wave_speed(self) -> float:
+        """sqrt((lambda + 2 mu) / rho)."""
+        lam, mu = self.lame_parameters()
+        return math.sqrt((lam + 2 * mu) / self.density)
+
+
+class LinearElastic(_ElasticMaterial):
+    model: Literal["linear_elastic"]
+
+
+class NeoHookean(_ElasticMaterial):
+    model: Literal["neo_hookean"]
+
+
+class J2Plasticity(_ElasticMaterial):
+    model: Literal["j2_plasticity"]
+    yield_stress: Positive
+    hardening_modulus: NonNegative = 0.0  # 0: perfectly plastic
+
+
+class LinearEOS(_Model):
+    model: Literal["linear"]
+
+
+class MieGruneisenEOS(_Model):
+    model: Literal["mie_gruneisen"]
+    c0: Positive  # bulk speed of sound
+    s: NonNegative  # slope of the linear Hugoniot
+    gamma0: NonNegative  # Grüneisen gamma of the reference state
+
+
+class JohnsonCookDamage(_Model):
+    model: Literal["johnson_cook"]
+    D1: Real
+    D2: Real
+    D3: Real
+    D4: Real
+    D5: Real
+
+
+class JohnsonCook(_ElasticMaterial):
+    model: Literal["johnson_cook"]
+    A: Positive
+    B: NonNegative
+    n: NonNegative
+    C: NonNegative
+    reference_strain_rate: Positive
+    m: Positive
+    room_temperature: NonNegative
+    melt_temperature: Positive
+    specific_heat: Positive
+    taylor_quinney: Annotated[float, Strict(), Field(ge=0, le=1)]
+    eos: Annotated[Union[LinearEOS, MieGruneisenEOS], Field(discriminator="model")] = LinearEOS(model="linear")
+    damage: JohnsonCookDamage | None = None
+
+    @field_validator("melt_temperature")
+    @classmethod
+    def _melt_above_room(cls, value: float, info: ValidationInfo) -> float:
+        room = info.data.get("room_temperature")
+        if room is not None and not value > room:
+            raise _error(f"must be > room_temperature = {_fmt(room)}")
+        return value
+
+
+class Fluid(_Material):
+    """Weakly compressible fluid, Tait EOS p = bulk_modulus ((rho/rho0)**gamma - 1)."""
+
+    model: Literal["fluid"]
+    density: Positive
+    bulk_modulus: Positive
+    gamma: Positive = 7.0
+    viscosity: NonNegative = 0.0
+
+    def dilatational_wave_speed(self) -> float:
+        """sqrt(bulk_modulus * gamma / density): dp/drho of the Tait EOS at rest."""
+        return math.sqrt(self.bulk_modulus * self.gamma / self.density)
+
+
+class IdealGas(_Material):
+    """Ideal gas; each body gives its initial density and pressure."""
+
+    model: Literal["ideal_gas"]
+    gamma: Annotated[float, Strict(), Field(gt=1)] = 1.4
+
+    def sound_speed(self, density: float, pressure: float) -> float:
+        """sqrt(gamma p / rho); the wave speed depends on the body's state."""
+        return math.sqrt(self.gamma * pressure / density)
+
+
+class Rigid(_Material):
+    """Particles follow the body's prescribed ``velocity``; no waves travel in it."""
+
+    model: Literal["rigid"]
+    density: Positive
+
+
+Material = Annotated[
+    Union[LinearElastic, NeoHookean, J2Plasticity, JohnsonCook, Fluid, IdealGas, Rigid],
+    Field(discriminator="model"),
+]
+
+
+# --------------------------------------------------------------------------- geometry
+
+class _Geometry(_Model):
+    @field_validator("type", check_fields=False)
+    @classmethod
+    def _type_supported(cls, value: str) -> str:
+        return _require_supported(value, "GEOMETRIES")
+
+    def shape(self) -> geometry_shapes.Geometry:
+        """The inside-test object of ``solver.geometry``."""
+        return geometry_shapes.from_spec(self)
+
+
+class BoxGeometry(_Geometry):
+    type: Literal["box"]
+    lower: Vector
+    upper: Vector
+
+    _upper = field_validator("upper")(_upper_above_lower)
+
+
+class SphereGeometry(_Geometry):
+    """A ball in 3D, a disk in 2D, a segment in 1D."""
+
+    type: Literal["sphere"]
+    center: Vector
+    radius: Positive
+
+
+class CylinderGeometry(_Geometry):
+    """3D only: a circular cylinder along coordinate ``axis``, centred on ``center``."""
+
+    type: Literal["cylinder"]
+    center: Vector
+    radius: Positive
+    axis: Annotated[int, Strict(), Field(ge=0, le=2)] = 2
+    height: Positive
+
+
+class UnionGeometry(_Geometry):
+    type: Literal["union"]
+    parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
+
+
+class DifferenceGeometry(_Geometry):
+    """The first part minus all the others."""
+
+    type: Literal["difference"]
+    parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
+
+
+class IntersectionGeometry(_Geometry):
+    type: Literal["intersection"]
+    parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
+
+
+GeometrySpec = Annotated[
+    Union[BoxGeometry, SphereGeometry, CylinderGeometry, UnionGeometry, DifferenceGeometry, IntersectionGeometry],
+    Field(discriminator="type"),
+]
+for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
+    _combined.model_rebuild()
+
+
+# --------------------------------------------------------------------------- bodies, conditions
+
+class Body(_Model):
+    name: Annotated[str, Field(min_length=1)]
+    material: str
+    geometry: GeometrySpec
+    particles_per_cell: Annotated[int, Strict(), Field(ge=1)] = 2  # per axis
+    initial_velocity: list[SpaceValue] | None = None  # None: at rest
+    initial_temperature: NonNegative | None = None
+    initial_density: Positive | None = None  # ideal_gas bodies only
+    initial_pressure: NonNegative | None = None  # ideal_gas bodies only
+    velocity: list[TimeValue] | None = None  # rigid bodies only; None: at rest
+
+
+class VelocityCondition(_Model):
+    """Grid nodes inside ``where`` get the given components; None leaves one free."""
+
+    type: Literal["velocity"]
+    where: BoxGeometry
+    velocity: Annotated[list[TimeValue | None], Field(min_length=1)]
+
+    @field_validator("type")
+    @classmethod
+    def _type_supported(cls, value: str) -> str:
+        return _require_supported(value, "BOUNDARY_CONDITIONS")
+
+
+class WallCondition(_Model):
+    type: Literal["wall"]
+    face: Literal["x-", "x+", "y-", "y+", "z-", "z+"]
+    mode: Literal["stick", "slip", "friction"]
+    friction: NonNegative | None = None  # Coulomb coefficient, mode "friction" only
+
+    @field_validator("type")
+    @classmethod
+    def _type_supported(cls, value: str) -> str:
+        return _require_supported(value, "BOUNDARY_CONDITIONS")
+
+    @field_validator("mode")
+    @classmethod
+    def _mode_supported(cls, value: str) -> str:
+        return _require_supported(value, "WALL_MODES")
+
+    @model_validator(mode="after")
+    def _friction_with_mode(self) -> "WallCondition":
+        if self.mode == "friction" and self.friction is None:
+            raise _problems([("friction", "required with mode 'friction'")])
+        if self.mode != "friction" and self.friction is not None:
+            raise _problems([("friction", "only used with mode 'friction'")])
+        return self
+
+
+BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition], Field(discriminator="type")]
+
+
+# --------------------------------------------------------------------------- time, output
+
+class Time(_Model):
+    end: Positive
+    dt: Positive | None = None  # None: adaptive, dt = cfl * h / max(c + |v|)
+    cfl: Annotated[float, Strict(), Field(gt=0, le=1)] = 0.5
+    max_steps: Annotated[int, Strict(), Field(ge=1)] = 10_000_000
+
+    def fixed_steps(self) -> int | None:
+        """Steps of a fixed-dt run: end/dt rounded up, ignoring round-off below a
+        millionth of a step (3.5 / 0.001 is 3500); None if adaptive."""
+        if self.dt is None:
+            return None
+        return max(1, math.ceil(self.end / self.dt - 1e-6))
+
+    @model_validator(mode="after")
+    def _steps_within_guard(self) -> "Time":
+        steps = self.fixed_steps()
+        if steps is not None and steps > self.max_steps:
+            raise _problems([("dt", f"end / dt = {steps} steps, more than max_steps = {self.max_steps}")])
+        return self
+
+
+def _known_output_field(name: str) -> str | None:
+    """None if ``name`` can be written, else the reason."""
+    if name not in CONTRACT_OUTPUT_FIELDS | capabilities.OUTPUT_FIELDS:
+        known = ", ".join(sorted(CONTRACT_OUTPUT_FIELDS | capabilities.OUTPUT_FIELDS))
+        return f"unknown output field {name!r}; known fields: {known}"
+    if name not in capabilities.OUTPUT_FIELDS:
+        return f"{name!r} is not supported yet"
+    return None
+
+
+class Preview(_Model):
+    field: str = "velocity_magnitude"
+
+    @field_validator("field")
+    @classmethod
+    def _field_known(cls, value: str) -> str:
+        reason = _known_output_field(value)
+        if reason:
+            raise _error(reason)
+        return value
+
+
+class Output(_Model):
+    frames: Annotated[int, Strict(), Field(ge=2)] = 51  # first and last included
+    fields: list[str] = Field(default_factory=lambda: ["position", "velocity", "stress"])
+    energies: Energies = True  # or N: every N steps
+    preview: Preview = Field(default_factory=Preview)
+
+    @field_validator("fields")
+    @classmethod
+    def _fields_known(cls, fields: list[str]) -> list[str]:
+        problems = []
+        for i, name in enumerate(fields):
+            reason = _known_output_field(name)
+            if reason:
+                problems.append((f"[{i}]", reason))
+            elif name in fields[:i]:
+                problems.append((f"[{i}]", f"{name!r} is listed twice"))
+        if problems:
+            raise _problems(problems)
+        return fields
+
+
+class Parallel(_Model):
+    processes: Annotated[int, Strict(), Field(ge=1)] = 1  # a request; the service may cap it
+
+    @field_validator("processes")
+    @classmethod
+    def _processes_supported(cls, value: int) -> int:
+        if value > capabilities.MAX_PROCESSES:
+            raise _error(f"{value} processes is not supported yet (at most {capabilities.MAX_PROCESSES})")
+        return value
+
+
+# --------------------------------------------------------------------------- the scene
+
+class Scene(_Model):
+    version: Literal[1] = 1
+    name: str = "untitled"
+    dimension: Literal[1, 2, 3]
+    axisymmetric: Boolean = False  # 2D only: x = r, y = z
+    method: Method = Field(default_factory=Method)
+    grid: Grid
+    materials: Annotated[dict[str, Material], Field(min_length=1)]
+    bodies: Annotated[list[Body], Field(min_length=1)]
+    boundary_conditions: list[BoundaryCondition] = Field(default_factory=list)
+    gravity: Vector | None = None
+    body_force: list[BodyForceValue] | None = None
+    time: Time
+    output: Output = Field(default_factory=Output)
+    parallel: Parallel = Field(default_factory=Parallel)
+
+    @field_validator("axisymmetric")
+    @classmethod
+    def _axisymmetric_in_2d(cls, value: bool, info: ValidationInfo) -> bool:
+        if value and info.data.get("dimension", 2) != 2:
+            raise _error("only possible with dimension 2 (x = r, y = z)")
+        if value and not capabilities.AXISYMMETRIC:
+            raise _error("axisymmetric scenes are not supported yet")
+        return value
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "Scene":
+        problems = _cross_checks(self)
+        if problems:
+            raise _problems(problems)
+        return self
+
+    # Grid helpers for the solver. The number of cells per axis is
+    # n = ceil((upper - lower) / h) (ignoring round-off), and the grid really ends
+    # at lower + n h, which may lie a little above the given upper.
+
+    def cell_sizes(self) -> tuple[float, ...]:
+        size = self.grid.cell_size
+        return tuple(size) if isinstance(size, list) else (size,) * self.dimension
+
+    def grid_lower(self) -> tuple[float, ...]:
+        if self.grid.lower is not None:
+            return tuple(self.grid.lower)
+        lower, _ = self._bodies_box()
+        return tuple(lower - 2 * np.array(self.cell_sizes()))
+
+    def grid_shape(self) -> tuple[int, ...]:
+        """Number of cells per axis."""
+        if self.grid.upper is not None:
+            upper = np.array(self.grid.upper)
+        else:
+            upper = self._bodies_box()[1] + 2 * np.array(self.cell_sizes())
+        cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
+        return tuple(max(1, math.ceil(n - 1e-9)) for n in cells)
+
+    def grid_upper(self) -> tuple[float, ...]:
+        return tuple(lo + n * h for lo, n, h in zip(self.grid_lower(), self.grid_shape(), self.cell_sizes()))
+
+    def _bodies_box(self) -> tuple[np.ndarray, np.ndarray]:
+        boxes = [body.geometry.shape().bounding_box() for body in self.bodies]
+        return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+
+
+# --------------------------------------------------------------------------- cross checks
+
+def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
+    """The rules that tie parts of a structurally valid scene together."""
+    dim = scene.dimension
+    problems: list[tuple[str, str]] = []
+
+    def length_ok(path: str, values: list | None) -> bool:
+        if values is not None and len(values) != dim:
+            problems.append((path, f"must have {dim} components (dimension is {dim}), got {len(values)}"))
+            return False
+        return True
+
+    def expressions_ok(path: str, values: list | None, variables: tuple[str, ...]) -> None:
+        for i, value in enumerate(values or []):
+            if isinstance(value, str):
+                used = compile_expression(value, variables).variables_used
+                for name in sorted(n for n in used if _AXIS_OF_VARIABLE.get(n, -1) >= dim):
+                    problems.append((f"{path}[{i}]", f"variable {name!r} does not exist in a {dim}D scene"))
+
+    grid_ok = all([
+        length_ok("grid.lower", scene.grid.lower),
+        length_ok("grid.upper", scene.grid.upper),
+        length_ok("grid.cell_size", scene.grid.cell_size if isinstance(scene.grid.cell_size, list) else None),
+    ])
+    if scene.method.formulation == "ulmpm":
+        for name in ("lower", "upper"):
+            if getattr(scene.grid, name) is None:
+                problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
+                grid_ok = False
+
+    length_ok("gravity", scene.gravity)
+    if length_ok("body_force", scene.body_force):
+        expressions_ok("body_force", scene.body_force, BODY_FORCE_VARIABLES)
+
+    names: dict[str, int] = {}
+    for i, body in enumerate(scene.bodies):
+        path = f"bodies[{i}]"
+        if body.name in names:
+            problems.append((f"{path}.name", f"{body.name!r} is already the name of bodies[{names[body.name]}]"))
+        names.setdefault(body.name, i)
+        material = scene.materials.get(body.material)
+        if material is None:
+            defined = ", ".join(repr(name) for name in scene.materials)
+            problems.append((f"{path}.material", f"unknown material {body.material!r}; defined: {defined}"))
+        geometry_ok = _geometry_problems(f"{path}.geometry", body.geometry, dim, problems)
+        if length_ok(f"{path}.initial_velocity", body.initial_velocity):
+            expressions_ok(f"{path}.initial_velocity", body.initial_velocity, SPACE_VARIABLES)
+        if material is not None:
+            problems += _body_material_problems(path, body, material, length_ok)
+        if scene.method.formulation == "ulmpm" and grid_ok and geometry_ok:
+            problems += _outside_grid(f"{path}.geometry", body, scene)
+
+    walls: dict[str, int] = {}
+    for i, condition in enumerate(scene.boundary_conditions):
+        path = f"boundary_conditions[{i}]"
+        if isinstance(condition, VelocityCondition):
+            length_ok(f"{path}.where.lower", condition.where.lower)
+            length_ok(f"{path}.where.upper", condition.where.upper)
+            length_ok(f"{path}.velocity", condition.velocity)
+        else:
+            axis = "xyz".index(condition.face[0])
+            if axis >= dim:
+                problems.append((f"{path}.face", f"{condition.face!r} is not a face of a {dim}D grid"))
+            elif condition.face in walls:
+                problems.append((f"{path}.face", f"face {condition.face!r} already has a wall "
+                                                 f"(boundary_conditions[{walls[condition.face]}])"))
+            walls.setdefault(condition.face, i)
+    return problems
+
+
+def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str, str]]) -> bool:
+    """Check vector lengths of a geometry tree against ``dim``; True if all fit."""
+    if isinstance(spec, (UnionGeometry, DifferenceGeometry, IntersectionGeometry)):
+        results = [_geometry_problems(f"{path}.parts[{i}]", part, dim, problems) for i, part in enumerate(spec.parts)]
+        return all(results)
+    if isinstance(spec, CylinderGeometry) and dim != 3:
+        problems.append((f"{path}.type", f"a cylinder is a 3D geometry; in {dim}D use a sphere or a box"))
+        return False
+    ok = True
+    for name in ("lower", "upper", "center"):
+        values = getattr(spec, name, None)
+        if values is not None and len(values) != dim:
+            problems.append((f"{path}.{name}", f"must have {dim} components (dimension is {dim}), got {len(values)}"))
+            ok = False
+    return ok
+
+
+def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> list[tuple[str, str]]:
+    problems = []
+    if isinstance(material, IdealGas):
+        for name in ("initial_density", "initial_pressure"):
+            if getattr(body, name) is None:
+                problems.append((f"{path}.{name}", "required for an 'ideal_gas' material"))
+    else:
+        for name in ("initial_density", "initial_pressure"):
+            if getattr(body, name) is not None:
+                problems.append((f"{path}.{name}", "only used with an 'ideal_gas' material"))
+    if body.velocity is not None:
+        if not isinstance(material, Rigid):
+            problems.append((f"{path}.velocity", "a prescribed velocity needs a 'rigid' material; "
+                                                 "use initial_velocity for deformable bodies"))
+        else:
+            length_ok(f"{path}.velocity", body.velocity)
+    return problems
+
+
+def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:
+    lower, upper = body.geometry.shape().bounding_box()
+    grid_lower, grid_upper = np.array(scene.grid_lower()), np.array(scene.grid_upper())
+    tolerance = 1e-9 * max(scene.cell_sizes())
+    if np.all(lower >= grid_lower - tolerance) and np.all(upper <= grid_upper + tolerance):
+        return []
+    box = " x ".join(f"[{_fmt(lo)}, {_fmt(up)}]" for lo, up in zip(lower, upper))
+    grid = " x ".join(f"[{_fmt(lo)}, {_fmt(up)}]" for lo, up in zip(grid_lower, grid_upper))
+    return [(path, f"the body (bounding box {box}) extends outside the grid {grid}")]
+
+
+# --------------------------------------------------------------------------- loading
+
+@dataclass(frozen=True)
+class Limits:
+    """Size limits checked by ``load_scene`` (None: unlimited)."""
+
+    max_particles: int | None = None
+    max_grid_nodes: int | None = None
+    max_steps: int | None = None
+
+
+def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None) -> Scene:
+    """Validate a scene given as a path to a JSON file, JSON text, a dict or a Scene.
+
+    Raises SceneError listing every problem found."""
+    if isinstance(source, Scene):
+        scene = source
+    else:
+        data = _read(source)
+        try:
+            scene = Scene.model_validate(data)
+        except ValidationError as exc:
+            raise SceneError(_format_errors(exc, data)) from None
+    if limits is not None:
+        problems = _limit_problems(scene, limits)
+        if problems:
+            raise SceneError([{"path": path, "message": message} for path, message in problems])
+    return scene
+
+
+def _read(source: Any) -> dict:
+    if isinstance(source, dict):
+        return source
+    if isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith(("{", "["))):
+        try:
+            text = Path(source).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise SceneError([{"path": "", "message": f"cannot read the scene file {str(source)!r}: {exc}"}]) from None
+    elif isinstance(source, str):
+        text = source
+    else:
+        raise SceneError([{"path": "", "message": f"a scene is a path, JSON text or a dict, not {type(source).__name__}"}])
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise SceneError([{"path": "", "message": f"invalid JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}"}]) from None
+    if not isinstance(data, dict):
+        raise SceneError([{"path": "", "message": "a scene must be a JSON object"}])
+    return data
+
+
+def _format_errors(exc: ValidationError, data: Any) -> list[dict[str, str]]:
+    errors = []
+    for error in exc.errors():
+        loc = _without_tags(error["loc"], data)
+        if error["type"] == "scene_problems":
+            errors += [{"path": _join(_path(loc), rel), "message": message} for rel, message in error["ctx"]["problems"]]
+        elif error["type"] in ("union_tag_invalid", "union_tag_not_found"):
+            key = error["ctx"]["discriminator"].strip("'")
+            message = (f"unknown {key} {error['ctx']['tag']!r}; expected one of {error['ctx']['expected_tags']}"
+                       if error["type"] == "union_tag_invalid" else "required")
+            errors.append({"path": _join(_path(loc), key), "message": message})
+        else:
+            errors.append({"path": _path(loc), "message": _message(error)})
+    return errors
+
+
+def _without_tags(loc: tuple, data: Any) -> list:
+    """Drop the discriminator tags pydantic puts in locations ('sphere' in
+    bodies.0.sphere.radius), found by walking the input alongside the location."""
+    kept = []
+    node = data
+    tag_skipped = False
+    for item in loc:
+        # A tag comes right after the union's position, even where a key has the
+        # same name as the tag ({"type": "velocity", "velocity": [...]}).
+        if (not tag_skipped and isinstance(node, dict) and isinstance(item, str)
+                and item in (node.get("type"), node.get("model"))):
+            tag_skipped = True
+            continue
+        tag_skipped = False
+        kept.append(item)
+        if isinstance(node, dict):
+            node = node.get(item)
+        elif isinstance(node, (list, tuple)) and isinstance(item, int) and 0 <= item < len(node):
+            node = node[item]
+        else:
+            node = None
+    return kept
+
+
+def _path(loc: list) -> str:
+    path = ""
+    for item in loc:
+        path += f"[{item}]" if isinstance(item, int) else (f".{item}" if path else str(item))
+    return path
+
+
+def _join(base: str, relative: str) -> str:
+    if not base or not relative or relative.startswith("["):
+        return base + relative
+    return f"{base}.{relative}"
+
+
+_COMPARISON_MESSAGES = {
+    "greater_than": ("gt", ">"),
+    "greater_than_equal": ("ge", ">="),
+    "less_than": ("lt", "<"),
+    "less_than_equal": ("le", "<="),
+}
+
+
+def _message(error: dict) -> str:
+    kind = error["type"]
+    if kind in _COMPARISON_MESSAGES:
+        key, symbol = _COMPARISON_MESSAGES[kind]
+        return f"must be {symbol} {_fmt(error['ctx'][key])}"
+    if kind == "missing":
+        return "required"
+    if kind == "too_short":
+        return f"must have at least {error['ctx']['min_length']} item(s)"
+    if kind == "too_long":
+        return f"must have at most {error['ctx']['max_length']} item(s)"
+    if kind == "extra_forbidden":
+        return "unknown key (not part of the scene format)"
+    message = error["msg"]
+    for prefix in ("Value error, ", "Assertion failed, "):
+        message = message.removeprefix(prefix)
+    return message.replace("Input should be", "must be")
+
+
+def _limit_problems(scene: Scene, limits: Limits) -> list[tuple[str, str]]:
+    # Imported here: summary and seeding read the Scene defined in this module.
+    from solver.seeding import count_particles
+    from solver.summary import estimate_steps
+
+    problems = []
+    if limits.max_grid_nodes is not None:
+        nodes = math.prod(n + 1 for n in scene.grid_shape())
+        if nodes > limits.max_grid_nodes:
+            problems.append(("grid", f"{nodes} grid nodes, over the limit of {limits.max_grid_nodes}"))
+    if limits.max_steps is not None:
+        steps = estimate_steps(scene)
+        if steps > limits.max_steps:
+            problems.append(("time", f"about {steps} time steps, over the limit of {limits.max_steps}"))
+    if limits.max_particles is not None:
+        particles = sum(count_particles(scene, stop_above=limits.max_particles))
+        if particles > limits.max_particles:
+            problems.append(("bodies", f"more particles than the limit of {limits.max_particles}"))
+    return problems

@@ -1,0 +1,118 @@
+"""The scene summary: counts, steps, memory and run-time estimates, without allocation."""
+
+import math
+import tracemalloc
+
+import pytest
+
+from solver import capabilities
+from solver.scene import load_scene
+from solver.summary import summarize
+
+RUBBER = {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1000, "poisson_ratio": 0.3}
+
+
+def two_disks(dt=0.001) -> dict:
+    """VERIFICATION_CASES E2 (Karamelo listing 2)."""
+    return {
+        "dimension": 2,
+        "grid": {"lower": [-0.5, -0.5], "upper": [0.5, 0.5], "cell_size": 0.05},
+        "materials": {"rubber": RUBBER},
+        "bodies": [
+            {"name": "disk1", "material": "rubber", "initial_velocity": [0.1, 0.1],
+             "geometry": {"type": "sphere", "center": [-0.3, -0.3], "radius": 0.2}},
+            {"name": "disk2", "material": "rubber", "initial_velocity": [-0.1, -0.1],
+             "geometry": {"type": "sphere", "center": [0.3, 0.3], "radius": 0.2}},
+        ],
+        "time": {"end": 3.5, "dt": dt},
+    }
+
+
+def test_two_disk_counts():
+    summary = summarize(load_scene(two_disks()))
+    assert summary.particles == 416 and summary.particles_per_body == [208, 208]
+    assert summary.grid_shape == [20, 20] and summary.grid_nodes == 21 * 21
+    assert summary.dt == 0.001 and summary.estimated_steps == 3500  # 3.5 s / 0.001 s, E2
+
+
+def test_two_disk_memory_and_run_time():
+    summary = summarize(load_scene(two_disks()))
+    # 2D, linear: 4 nodes per particle. Per particle, 8-byte values: position 2, velocity 2,
+    # F 4, L 4, stress 9, mass, volume, volume0, density, id 5, weights 4, gradients 8,
+    # node indices 4 = 42; plus the 4-byte body index. Per node: mass 1 + momenta 4 + force 2.
+    assert summary.memory_bytes == 416 * (42 * 8 + 4) + 441 * 7 * 8
+    assert summary.estimated_run_seconds == pytest.approx(416 * 3500 / 1e7, rel=1e-12)
+
+
+def test_adaptive_step_estimate():
+    summary = summarize(load_scene(two_disks(dt=None)))
+    # dt = cfl h / (c + |v|max): c = 1.1602 (E2 [derived]), |v| = 0.1 sqrt(2)
+    c = math.sqrt((7500 / 13 + 2 * 5000 / 13) / 1000)
+    dt = 0.5 * 0.05 / (c + 0.1 * math.sqrt(2))
+    assert summary.dt == pytest.approx(dt, rel=1e-12)
+    assert summary.estimated_steps == math.ceil(3.5 / dt)
+
+
+def test_expression_velocities_are_sampled_over_the_body():
+    scene = two_disks(dt=None)
+    # |v| peaks at the disk's far corner of its box: x = y = 0.2 gives v = (2, 2)
+    scene["bodies"][1]["initial_velocity"] = ["10*x", "10*y"]
+    summary = summarize(load_scene(scene))
+    c = math.sqrt((7500 / 13 + 2 * 5000 / 13) / 1000)
+    assert summary.dt == pytest.approx(0.5 * 0.05 / (c + 5 * math.sqrt(2)), rel=1e-12)
+
+
+def test_gas_wave_speed_comes_from_the_body(monkeypatch):
+    monkeypatch.setattr(capabilities, "MATERIAL_MODELS", capabilities.MATERIAL_MODELS | {"ideal_gas"})
+    scene = two_disks(dt=None)
+    scene["materials"] = {"air": {"model": "ideal_gas", "gamma": 1.4}}
+    for body in scene["bodies"]:
+        body.update(material="air", initial_density=1.0, initial_pressure=1.0, initial_velocity=None)
+    scene["bodies"][1].update(initial_density=0.125, initial_pressure=0.1)  # Sod's right state
+    summary = summarize(load_scene(scene))
+    fastest = max(math.sqrt(1.4), math.sqrt(1.4 * 0.1 / 0.125))
+    assert summary.dt == pytest.approx(0.5 * 0.05 / fastest, rel=1e-12)
+
+
+def test_shape_function_support_enters_the_memory(monkeypatch):
+    monkeypatch.setattr(capabilities, "SHAPE_FUNCTIONS", capabilities.SHAPE_FUNCTIONS | {"cubic_bspline"})
+    scene = two_disks()
+    scene["method"] = {"shape_function": "cubic_bspline"}
+    summary = summarize(load_scene(scene))
+    # 16 nodes per particle: 42 - 4*4 + 16*4 = 90 values
+    assert summary.memory_bytes == 416 * (90 * 8 + 4) + 441 * 7 * 8
+
+
+def test_3d_throughput():
+    scene = {
+        "dimension": 3,
+        "grid": {"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.25},
+        "materials": {"rubber": RUBBER},
+        "bodies": [{"name": "block", "material": "rubber", "particles_per_cell": 1,
+                    "geometry": {"type": "box", "lower": [0, 0, 0], "upper": [0.5, 0.5, 1]}}],
+        "time": {"end": 1.0, "dt": 0.01},
+    }
+    summary = summarize(load_scene(scene))
+    assert summary.particles == 2 * 2 * 4 and summary.grid_nodes == 125
+    assert summary.estimated_run_seconds == pytest.approx(16 * 100 / 3e6, rel=1e-12)
+
+
+def test_no_allocation_proportional_to_the_scene():
+    # 8 million particles: their positions alone would take 192 MB.
+    scene = {
+        "dimension": 3,
+        "grid": {"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.01},
+        "materials": {"rubber": RUBBER},
+        "bodies": [{"name": "block", "material": "rubber",
+                    "geometry": {"type": "box", "lower": [0, 0, 0], "upper": [1, 1, 1]}}],
+        "time": {"end": 1.0, "dt": 0.01},
+    }
+    scene = load_scene(scene)
+    tracemalloc.start()
+    try:
+        summary = summarize(scene)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert summary.particles == 8_000_000
+    assert peak < 50e6
