@@ -8,6 +8,11 @@ every shape function and every dimension. Arrays are contiguous float64
 
 P2G scatters particle data to nodes and is written serially: each particle adds
 into the nodes of its stencil, and two particles may share a node.
+
+`spec` is a pair of tuples ((0,) * dim, (0,) * nodes_per_particle): numba
+compiles one specialisation per tuple type, so the dimension and the stencil
+size are compile-time constants and the small inner loops unroll. See
+`stencil_spec`.
 """
 from __future__ import annotations
 
@@ -15,37 +20,49 @@ import numpy as np
 from numba import njit
 
 
+def stencil_spec(dim: int, nodes_per_particle: int) -> tuple:
+    return ((0,) * dim, (0,) * nodes_per_particle)
+
+
 @njit(cache=True)
-def p2g(idx, w, dw, mass, vel, volume, stress, acc, grid_mass, grid_mom, grid_force):
+def p2g(spec, idx, w, dw, mass, vel, volume, stress, acc, grid_mass, grid_mom, grid_force):
     """Mass, momentum and force to the grid (Algorithm 1, lines 8-12).
 
     f_I = sum_p m_p phi_I b_p - V_p sigma_p . grad phi_I. `acc` is the body
     acceleration per particle, or a single row shared by all (gravity only).
     """
-    n, nk = w.shape
-    dim = vel.shape[1]
+    n = w.shape[0]
+    dim, nk = len(spec[0]), len(spec[1])
     shared_acc = acc.shape[0] == 1
+    vs = np.empty((dim, dim))   # V_p sigma_p, hoisted out of the node loop
+    mv = np.empty(dim)
+    ma = np.empty(dim)
     for p in range(n):
         m = mass[p]
         vol = volume[p]
         ap = 0 if shared_acc else p
+        for a in range(dim):
+            mv[a] = m * vel[p, a]
+            ma[a] = m * acc[ap, a]
+            for b in range(dim):
+                vs[a, b] = vol * stress[p, a, b]
         for k in range(nk):
             node = idx[p, k]
-            mw = m * w[p, k]
-            grid_mass[node] += mw
+            wk = w[p, k]
+            grid_mass[node] += wk * m
             for a in range(dim):
-                grid_mom[node, a] += mw * vel[p, a]
-                f = mw * acc[ap, a]
+                grid_mom[node, a] += wk * mv[a]
+                f = wk * ma[a]
                 for b in range(dim):
-                    f -= vol * stress[p, a, b] * dw[p, k, b]
+                    f -= vs[a, b] * dw[p, k, b]
                 grid_force[node, a] += f
 
 
 @njit(cache=True)
-def p2g_mass_momentum(idx, w, mass, vel, grid_mass, grid_mom):
+def p2g_mass_momentum(spec, idx, w, mass, vel, grid_mass, grid_mom):
     """Mass and momentum only (the first transfer of USF)."""
-    n, nk = w.shape
-    dim = vel.shape[1]
+    n = w.shape[0]
+    dim, nk = len(spec[0]), len(spec[1])
     for p in range(n):
         m = mass[p]
         for k in range(nk):
@@ -57,10 +74,10 @@ def p2g_mass_momentum(idx, w, mass, vel, grid_mass, grid_mom):
 
 
 @njit(cache=True)
-def p2g_force(idx, w, dw, mass, volume, stress, acc, grid_force):
+def p2g_force(spec, idx, w, dw, mass, volume, stress, acc, grid_force):
     """Internal and external nodal forces (USF computes them after the stress update)."""
-    n, nk = w.shape
-    dim = grid_force.shape[1]
+    n = w.shape[0]
+    dim, nk = len(spec[0]), len(spec[1])
     shared_acc = acc.shape[0] == 1
     for p in range(n):
         m = mass[p]
@@ -119,14 +136,14 @@ def apply_dirichlet(bc_node, bc_axis, bc_value, grid_mass, v):
 
 
 @njit(cache=True)
-def g2p(idx, w, dt, flip_ratio, v_old, v_new, x, vel, mass, double_map, grid_mom_new):
+def g2p(spec, idx, w, dt, flip_ratio, v_old, v_new, x, vel, mass, double_map, grid_mom_new):
     """Particle velocity (PIC/FLIP blend, eq. 2.53) and position (eq. 2.54).
 
     With `double_map` (MUSL) the updated particle momentum is mapped back to the
     grid in the same pass (Algorithm 1, line 20): it uses the old weights too.
     """
-    n, nk = w.shape
-    dim = vel.shape[1]
+    n = w.shape[0]
+    dim, nk = len(spec[0]), len(spec[1])
     v_pic = np.zeros(dim)
     dv = np.zeros(dim)
     for p in range(n):
@@ -152,31 +169,34 @@ def g2p(idx, w, dt, flip_ratio, v_old, v_new, x, vel, mass, double_map, grid_mom
 
 
 @njit(cache=True)
-def update_kinematics(idx, dw, v_grid, dt, L, F, volume, volume0):
+def update_kinematics(spec, idx, dw, v_grid, dt, L, F, volume, volume0):
     """L_p = sum_I v_I (x) grad phi_I, F <- (I + L dt) F, V = det(F) V0 (eq. 2.55).
 
     Returns the index of the first particle whose J = det F is not positive
     (the element has inverted: the run is unstable), or -1.
     """
-    n, nk = idx.shape
-    dim = v_grid.shape[1]
-    F_old = np.empty((dim, dim))
+    n = idx.shape[0]
+    dim, nk = len(spec[0]), len(spec[1])
+    Lp = np.empty((dim, dim))
+    Fp = np.empty((dim, dim))
     bad = -1
     for p in range(n):
+        Lp[:, :] = 0.0
+        for k in range(nk):
+            node = idx[p, k]
+            for a in range(dim):
+                va = v_grid[node, a]
+                for b in range(dim):
+                    Lp[a, b] += va * dw[p, k, b]
         for a in range(dim):
             for b in range(dim):
-                s = 0.0
-                for k in range(nk):
-                    s += v_grid[idx[p, k], a] * dw[p, k, b]
-                L[p, a, b] = s
+                Fp[a, b] = F[p, a, b]
+                L[p, a, b] = Lp[a, b]
         for a in range(dim):
             for b in range(dim):
-                F_old[a, b] = F[p, a, b]
-        for a in range(dim):
-            for b in range(dim):
-                s = F_old[a, b]
+                s = Fp[a, b]
                 for c in range(dim):
-                    s += dt * L[p, a, c] * F_old[c, b]
+                    s += dt * Lp[a, c] * Fp[c, b]
                 F[p, a, b] = s
         J = determinant(F[p])
         volume[p] = J * volume0[p]

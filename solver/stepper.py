@@ -53,6 +53,7 @@ class ExplicitMPM:
         self.grid = make_grid(scene)
         self.shape = shape.get(method.shape_function)
         self.stencil = make_stencil(self.particles.count, scene.dimension, self.shape.SUPPORT)
+        self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         self.constraints = Constraints(scene, self.grid)
         self.loads = BodyLoads(scene)
         if self.loads.needs_reference:
@@ -81,14 +82,14 @@ class ExplicitMPM:
         self._interpolation_weights()                                   # phi_I(x_p), grad phi_I(x_p)
         g.reset()
         acc = self.loads.acceleration(p, self.time)
-        kernels.p2g(s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
+        kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
                     g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17: v_I^t, v~_I^{t+dt}
         self._impose(g.v_old)                                           # line 15
         self.boundary_work += self._impose(g.v_new)
         g.momentum.fill(0.0)
-        kernels.g2p(s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
+        kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, True, g.momentum)                 # lines 18-20: x_p, v_p, (mv)_I again
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)   # line 24: v_I^{t+dt}
         self._impose(g.v_new)                                           # line 21
@@ -99,11 +100,11 @@ class ExplicitMPM:
         self._interpolation_weights()
         g.reset()
         acc = self.loads.acceleration(p, self.time)
-        kernels.p2g(s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
+        kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
-        kernels.g2p(s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
+        kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)                # particles from v_I^{t+dt}
         self._update_stress(dt, g.v_new)                                # stress last, from v_I^{t+dt}
 
@@ -111,23 +112,23 @@ class ExplicitMPM:
         p, g, s = self.particles, self.grid, self.stencil
         self._interpolation_weights()
         g.reset()
-        kernels.p2g_mass_momentum(s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+        kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
         self._impose(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self.loads.acceleration(p, self.time)
-        kernels.p2g_force(s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
+        kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
-        kernels.g2p(s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
+        kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
 
     # -- phases -----------------------------------------------------------------
 
     def _interpolation_weights(self) -> None:
         p, g, s = self.particles, self.grid, self.stencil
-        outside = self.shape.weights(p.x, g.lower, g.inv_h, g.cells, g.strides, s.idx, s.w, s.dw)
+        outside = self.shape.weights(self.spec, p.x, g.lower, g.inv_h, g.cells, g.strides, s.idx, s.w, s.dw)
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
@@ -137,7 +138,7 @@ class ExplicitMPM:
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil
-        inverted = kernels.update_kinematics(s.idx, s.dw, v_grid, dt, p.L, p.F, p.volume, p.volume0)
+        inverted = kernels.update_kinematics(self.spec, s.idx, s.dw, v_grid, dt, p.L, p.F, p.volume, p.volume0)
         if inverted >= 0:
             J = float(np.linalg.det(p.F[inverted]))
             self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")

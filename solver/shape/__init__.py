@@ -3,11 +3,12 @@
 A shape function module provides `SUPPORT` (nodes per axis that a particle
 touches) and a numba kernel
 
-    weights(x, lower, inv_h, cells, strides, idx, w, dw) -> int
+    weights(spec, x, lower, inv_h, cells, strides, idx, w, dw) -> int
 
 filling, for every particle p and every node k of its stencil, the flat node
 index idx[p, k], the weight w[p, k] and the gradient dw[p, k, :]. It returns the
-index of the first particle outside the grid, or -1. The transfer kernels only
+index of the first particle outside the grid, or -1. `spec` makes the
+dimension and stencil size compile-time constants (kernels.stencil_spec). The transfer kernels only
 ever see idx, w and dw, so they are the same for every shape function.
 """
 from __future__ import annotations

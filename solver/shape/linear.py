@@ -13,9 +13,9 @@ SUPPORT = 2  # nodes per axis
 
 
 @njit(cache=True)
-def weights(x, lower, inv_h, cells, strides, idx, w, dw):
-    n, dim = x.shape
-    nk = w.shape[1]
+def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw):
+    n = x.shape[0]
+    dim, nk = len(spec[0]), len(spec[1])
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, 2))   # 1D weights of the two nodes, per axis
     g1 = np.empty((dim, 2))   # their derivatives

@@ -31,7 +31,7 @@ def stencil(x, lower, h, cells, strides):
     idx = np.zeros((n, nk), np.int64)
     w = np.zeros((n, nk))
     dw = np.zeros((n, nk, dim))
-    outside = linear.weights(x, lower, 1.0 / h, cells, strides, idx, w, dw)
+    outside = linear.weights(kernels.stencil_spec(dim, nk), x, lower, 1.0 / h, cells, strides, idx, w, dw)
     return outside, idx, w, dw
 
 
@@ -91,7 +91,7 @@ def test_p2g_conserves_mass_and_momentum(dim):
     _, idx, w, dw = stencil(x, lower, h, cells, strides)
     n_nodes = int(np.prod(cells + 1))
     gm, gp, gf = np.zeros(n_nodes), np.zeros((n_nodes, dim)), np.zeros((n_nodes, dim))
-    kernels.p2g(idx, w, dw, mass, vel, volume, stress, acc, gm, gp, gf)
+    kernels.p2g(kernels.stencil_spec(dim, w.shape[1]), idx, w, dw, mass, vel, volume, stress, acc, gm, gp, gf)
     assert gm.sum() == pytest.approx(mass.sum(), rel=ROUND_OFF)
     np.testing.assert_allclose(gp.sum(axis=0), (mass[:, None] * vel).sum(axis=0), rtol=ROUND_OFF, atol=ROUND_OFF * n)
     # internal forces are equal and opposite inside the body: they sum to zero
@@ -111,7 +111,7 @@ def test_cell_crossing_internal_force_jump():
         stress[:, 0, 0] = sigma
         _, idx, w, dw = stencil(x, lower, h, cells, strides)
         gm, gp, gf = np.zeros(3), np.zeros((3, 1)), np.zeros((3, 1))
-        kernels.p2g(idx, w, dw, np.ones(n), np.zeros((n, 1)), np.full(n, V), stress, np.zeros((1, 1)), gm, gp, gf)
+        kernels.p2g(kernels.stencil_spec(1, 2), idx, w, dw, np.ones(n), np.zeros((n, 1)), np.full(n, V), stress, np.zeros((1, 1)), gm, gp, gf)
         return gf[1, 0]
 
     assert force_on_middle_node([0.25, 0.75, 1.25, 1.75]) == pytest.approx(0.0, abs=1e-15)
