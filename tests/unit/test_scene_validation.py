@@ -3,6 +3,8 @@
 import copy
 import json
 import math
+import re
+from pathlib import Path
 
 import pytest
 
@@ -368,3 +370,11 @@ class TestGridHelpers:
         scene = load_scene(scene)
         assert scene.grid_lower() == pytest.approx((-0.6, -0.6), abs=1e-12)
         assert scene.grid_shape() == (24, 24)
+
+
+def test_complete_scenes_in_the_user_documentation_are_valid():
+    text = (Path(__file__).parents[2] / "docs" / "scene.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```json\n(.*?)```", text, flags=re.S)
+    assert len(blocks) >= 2
+    for block in blocks:
+        load_scene(block)
