@@ -53,8 +53,6 @@ CONTRACT_OUTPUT_FIELDS = frozenset({
     "deformation_gradient", "strain_energy_density",
 })
 
-WALL_FACES = ("x-", "x+", "y-", "y+", "z-", "z+")
-
 
 # --------------------------------------------------------------------------- errors
 
@@ -137,7 +135,6 @@ def _energies(value: Any) -> bool | int:
 
 
 Real = Annotated[float, Strict()]  # ints are accepted, booleans and strings are not
-Integer = Annotated[int, Strict()]
 Boolean = Annotated[bool, Strict()]
 Positive = Annotated[float, Strict(), Field(gt=0)]
 NonNegative = Annotated[float, Strict(), Field(ge=0)]
