@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import subprocess
 import sys
 import venv
@@ -47,6 +48,22 @@ def setup() -> None:
     STAMP.write_text(_fingerprint())
 
 
+def ensure_chromium() -> None:
+    """The dashboard tests drive Debian's headless Chromium; install it when it is missing."""
+    if shutil.which("chromium") or shutil.which("chromium-browser"):
+        return
+    apt = shutil.which("apt-get")
+    if apt is None or os.geteuid() != 0:
+        print("chromium is missing and cannot be installed here (needs root and apt-get): "
+              "the browser tests will fail; install the 'chromium' package", file=sys.stderr)
+        return
+    print("installing chromium for the dashboard tests (apt-get)", flush=True)
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    subprocess.run([apt, "-q", "update"], check=True, env=env, stdout=subprocess.DEVNULL)
+    subprocess.run([apt, "-q", "install", "-y", "--no-install-recommends", "chromium"], check=True, env=env,
+                   stdout=subprocess.DEVNULL)
+
+
 def run(argv: list[str]) -> int:
     return subprocess.call(argv, cwd=ROOT)
 
@@ -58,6 +75,7 @@ def main() -> int:
     if command == "serve":
         return run([str(BIN / "mpm"), "serve", *extra])
     if command == "test":
+        ensure_chromium()
         code = run([str(PY), "-m", "pytest", *(extra or ["tests"])])
         if code == 5:  # pytest: no tests collected, which is a failure here
             print("no tests were collected", file=sys.stderr)
