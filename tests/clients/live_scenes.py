@@ -1,0 +1,39 @@
+"""Scenes for the live tests, made from the service's own `two_disks` example so they
+follow whatever the scene schema of the day is."""
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+EXAMPLE = "two_disks"
+
+
+def quick(example: dict[str, Any], name: str = "sdk-quick", frames: int = 6) -> dict[str, Any]:
+    """The two colliding disks (about 3500 steps, a couple of seconds) with a few frames."""
+    scene = copy.deepcopy(example)
+    scene["name"] = name
+    scene["output"]["frames"] = frames
+    return scene
+
+
+def long(example: dict[str, Any], name: str = "sdk-long") -> dict[str, Any]:
+    """The same for minutes (500 000 steps): a job to watch running and to cancel."""
+    scene = quick(example, name)
+    scene["time"]["end"] = 500.0
+    return scene
+
+
+def unstable(example: dict[str, Any], name: str = "sdk-unstable") -> dict[str, Any]:
+    """A time step 4x over the CFL limit: the run blows up within a few steps."""
+    scene = quick(example, name)
+    scene["time"]["dt"] = 0.2
+    scene["time"]["end"] = 100.0
+    return scene
+
+
+def invalid(example: dict[str, Any]) -> dict[str, Any]:
+    """Two errors the validator must name by path."""
+    scene = quick(example, "sdk-invalid")
+    scene["bodies"][0]["geometry"]["radius"] = -0.2
+    next(iter(scene["materials"].values()))["poisson_ratio"] = 0.7
+    return scene

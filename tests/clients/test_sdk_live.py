@@ -1,0 +1,244 @@
+"""The SDK and the `mpm` client commands against a real service (`mpm serve`: API,
+embedded Redis and a worker), covering the whole surface and its error mapping."""
+from __future__ import annotations
+
+import asyncio
+import json
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+import live_scenes
+from mpm_client import (
+    AsyncClient,
+    Client,
+    Conflict,
+    JobCancelled,
+    JobFailed,
+    NotFound,
+    ServiceUnavailable,
+    TooLarge,
+    ValidationFailed,
+)
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def example(live) -> dict:
+    with Client(live.url) as client:
+        return client.example(live_scenes.EXAMPLE)
+
+
+def wait_running(job, timeout: float = 60.0) -> None:
+    """Until the job has made some progress (its first frame is written by then)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        record = job.refresh().record
+        if record.status == "running" and record.step > 0:
+            return
+        assert record.status in ("queued", "running"), record
+        time.sleep(0.2)
+    raise AssertionError(f"job {job.id} did not start running within {timeout} s: {job.record}")
+
+
+def test_examples_and_validation_summary(live_client, example):
+    names = [e.name for e in live_client.examples()]
+    assert live_scenes.EXAMPLE in names
+    summary = live_client.validate(live_scenes.quick(example))
+    assert summary.particles > 0 and summary.grid_nodes > 0
+    assert summary.estimated_steps == round(example["time"]["end"] / example["time"]["dt"])
+
+
+def test_validation_errors_name_every_path_and_create_no_job(live_client, example):
+    scene = live_scenes.invalid(example)
+    material = next(iter(scene["materials"]))
+    expected = {"bodies[0].geometry.radius", f"materials.{material}.poisson_ratio"}
+    with pytest.raises(ValidationFailed) as caught:
+        live_client.validate(scene)
+    assert {e["path"] for e in caught.value.errors} == expected
+    assert all(e["message"] for e in caught.value.errors)
+
+    before = [job.id for job in live_client.jobs()]
+    with pytest.raises(ValidationFailed) as caught:
+        live_client.submit(scene)
+    assert {e["path"] for e in caught.value.errors} == expected
+    assert [job.id for job in live_client.jobs()] == before  # a rejected job never half-exists
+
+
+def test_a_multi_frame_result_round_trip(live_client, example, tmp_path):
+    scene = live_scenes.quick(example, frames=6)
+    job = live_client.submit(scene)
+    assert job.record.status in ("queued", "running")
+    assert job.wait(timeout=180, poll=0.2, progress=False) is job
+    record = job.record
+    assert (record.status, record.progress, record.error) == ("succeeded", 1.0, None)
+    assert record.sim_time == pytest.approx(scene["time"]["end"], rel=1e-6)
+    assert job.scene()["name"] == "sdk-quick"
+
+    path = job.download(tmp_path / "nested" / "result.h5")
+    assert sorted(p.name for p in path.parent.iterdir()) == ["result.h5"]  # no leftovers
+    with h5py.File(path, "r") as result:
+        assert result.attrs["format"] == "mpm-result" and result.attrs["status"] == "complete"
+        frames = sorted(result["frames"])
+        assert len(frames) == 6
+        times = [result["frames"][f].attrs["time"] for f in frames]
+        assert times[0] == 0.0 and times[-1] == pytest.approx(scene["time"]["end"], rel=1e-6)
+        ids = [np.sort(result["frames"][f]["id"][()]) for f in frames]
+        assert all(np.array_equal(ids[0], other) for other in ids[1:])  # the same particles in every frame
+        assert len(ids[0]) == record.summary.particles
+        kinetic = result["time_series"]["kinetic_energy"][()]
+
+    with job.open() as reopened:  # reuses the download
+        assert sorted(reopened["frames"]) == frames
+
+    series = job.series()
+    assert {"time", "kinetic_energy", "strain_energy", "total_energy"} <= set(series)
+    assert np.all(np.diff(series["time"]) > 0)
+    np.testing.assert_array_equal(series["kinetic_energy"], kinetic)
+
+    last = job.preview(path=tmp_path / "last.png")
+    first = job.preview(frame=0, field="von_mises")
+    assert last.startswith(PNG_SIGNATURE) and first.startswith(PNG_SIGNATURE) and first != last
+    assert (tmp_path / "last.png").read_bytes() == last
+    with pytest.raises(ValidationFailed) as caught:
+        job.preview(frame=99)
+    assert caught.value.errors[0]["path"] == "frame"
+
+    job.delete()
+    with pytest.raises(NotFound):
+        job.refresh()
+
+
+def test_jobs_are_listed_newest_first_over_pages_and_filtered(live_client, example):
+    submitted = [live_client.submit(live_scenes.quick(example, f"sdk-list-{i}")) for i in range(3)]
+    for job in submitted:
+        job.wait(timeout=180, poll=0.2, progress=False)
+    listed = list(live_client.jobs(limit=1))  # one job a page: the iterator follows the cursors
+    ids = [job.id for job in listed]
+    assert len(ids) == len(set(ids))
+    positions = [ids.index(job.id) for job in submitted]
+    assert positions == sorted(positions, reverse=True)  # the later submitted, the earlier listed
+    created = [job.record.created_at for job in listed]
+    assert created == sorted(created, reverse=True)
+    succeeded = list(live_client.jobs(status="succeeded"))
+    assert {job.id for job in submitted} <= {job.id for job in succeeded}
+    assert all(job.record.status == "succeeded" for job in succeeded)
+
+
+def test_cancel_a_running_job_keeps_its_partial_result(live_client, example, tmp_path):
+    job = live_client.submit(live_scenes.long(example))
+    wait_running(job)
+    with pytest.raises(Conflict):
+        job.delete()  # not finished yet
+    with pytest.raises(Conflict):
+        job.download(tmp_path / "early.h5")
+    assert not (tmp_path / "early.h5").exists()
+
+    job.cancel()
+    with pytest.raises(JobCancelled):
+        job.wait(timeout=60, poll=0.2, progress=False)
+    assert job.record.status == "cancelled" and job.record.progress < 1.0
+    with pytest.raises(Conflict):
+        job.cancel()  # already finished
+
+    with h5py.File(job.download(tmp_path / "partial.h5"), "r") as result:
+        assert result.attrs["status"] == "partial"
+        assert len(result["frames"]) >= 1
+    job.delete()
+    with pytest.raises(NotFound):
+        live_client.job(job.id)
+
+
+def test_a_blown_up_run_raises_job_failed_with_the_solver_diagnostic(live_client, example):
+    job = live_client.submit(live_scenes.unstable(example))
+    with pytest.raises(JobFailed) as caught:
+        job.wait(timeout=120, poll=0.2, progress=False)
+    assert caught.value.status == "failed"
+    assert "unstable" in caught.value.diagnostic and "particle" in caught.value.diagnostic
+    assert job.record.error == caught.value.diagnostic
+
+
+def test_unknown_job_and_oversized_request_are_typed(live_client, example):
+    with pytest.raises(NotFound):
+        live_client.job(str(uuid.uuid4()))
+    scene = live_scenes.quick(example)
+    scene["name"] = "x" * 300_000  # over the service's MPM_MAX_BODY_BYTES
+    with pytest.raises(TooLarge):
+        live_client.submit(scene)
+
+
+def test_a_closed_port_is_service_unavailable():
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]  # nothing listens once the probe is closed
+    with Client(f"http://127.0.0.1:{port}", retries=1, backoff=0.01) as client:
+        with pytest.raises(ServiceUnavailable, match="cannot reach the service"):
+            client.examples()
+
+
+def test_async_client_live(live, example, tmp_path):
+    async def scenario() -> tuple[str, dict, bytes]:
+        async with AsyncClient(live.url) as client:
+            job = await client.submit(live_scenes.quick(example, "sdk-async"))
+            await job.wait(timeout=180, poll=0.2, progress=False)
+            await job.download(tmp_path / "async.h5")
+            series = await job.series()
+            png = await job.preview()
+            listed = [j.id async for j in client.jobs(limit=2)]
+            assert job.id in listed
+            await job.delete()
+            return job.record.status, series, png
+
+    status, series, png = asyncio.run(scenario())
+    assert status == "succeeded"
+    assert series["time"][-1] == pytest.approx(example["time"]["end"], rel=1e-6)
+    assert png.startswith(PNG_SIGNATURE)
+    with h5py.File(tmp_path / "async.h5", "r") as result:
+        assert len(result["frames"]) == 6
+
+
+def mpm(*args: str, env_server: str | None = None) -> subprocess.CompletedProcess:
+    """The installed `mpm` script, as a user runs it."""
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(Path.home())}
+    if env_server:
+        env["MPM_SERVER"] = env_server
+    return subprocess.run([str(Path(sys.executable).with_name("mpm")), *args], capture_output=True,
+                          text=True, timeout=300, env=env)
+
+
+def test_the_mpm_client_commands(live, example, tmp_path):
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(live_scenes.quick(example, "sdk-cli")))
+    out = tmp_path / "cli.h5"
+
+    submitted = mpm("submit", str(scene), "--download", str(out), "--server", live.url)
+    assert submitted.returncode == 0, submitted.stderr
+    job_id = submitted.stdout.strip()
+    assert "succeeded" in submitted.stderr  # the progress lines
+    with h5py.File(out, "r") as result:
+        assert len(result["frames"]) == 6
+
+    listed = mpm("jobs", "--status", "succeeded", env_server=live.url)  # the server from MPM_SERVER
+    assert listed.returncode == 0, listed.stderr
+    assert any(line.startswith(job_id) and "sdk-cli" in line for line in listed.stdout.splitlines())
+
+    status = mpm("status", job_id, "--json", "--server", live.url)
+    assert status.returncode == 0 and json.loads(status.stdout)["status"] == "succeeded"
+
+    again = tmp_path / "again.h5"
+    downloaded = mpm("download", job_id, str(again), "--server", live.url)
+    assert downloaded.returncode == 0 and again.read_bytes() == out.read_bytes()
+
+    refused = mpm("cancel", job_id, "--server", live.url)
+    assert refused.returncode == 1 and "mpm cancel: error:" in refused.stderr
+
+    missing = mpm("status", str(uuid.uuid4()), "--server", live.url)
+    assert missing.returncode == 1 and "error" in missing.stderr
