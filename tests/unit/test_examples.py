@@ -1,0 +1,92 @@
+"""The built-in example scenes."""
+import json
+import math
+
+import pytest
+
+from solver.examples import DEFAULT_DIR, ExampleNotFound, list_examples, load_example
+from solver.scene import load_scene
+from solver.summary import summarize
+
+EXAMPLE_FILES = sorted(DEFAULT_DIR.glob("*.json"))
+
+
+def test_the_documented_examples_are_there():
+    names = {example["name"] for example in list_examples()}
+    assert {"two_disks", "bar_vibration", "elastic_cube_3d", "column_under_gravity_2d"} <= names
+
+
+@pytest.mark.parametrize("path", EXAMPLE_FILES, ids=lambda p: p.stem)
+def test_every_example_validates(path):
+    scene = load_scene(path)
+    assert scene.name and scene.name != "untitled"  # the title the lists show
+
+
+def test_list_entries():
+    for example in list_examples():
+        scene = json.loads((DEFAULT_DIR / f"{example['name']}.json").read_text())
+        assert example == {"name": example["name"], "title": scene["name"], "dimension": scene["dimension"],
+                           "path": str(DEFAULT_DIR / f"{example['name']}.json")}
+
+
+def test_load_example_returns_the_document():
+    assert load_example("two_disks") == json.loads((DEFAULT_DIR / "two_disks.json").read_text())
+
+
+@pytest.mark.parametrize("name", ["../pyproject", "..", "/etc/passwd", "two_disks.json", "TWO_DISKS", ""])
+def test_only_listed_names_are_loaded(name):
+    with pytest.raises(ExampleNotFound, match="available: .*two_disks"):
+        load_example(name)
+
+
+def test_not_found_is_a_key_error_with_a_readable_message():
+    with pytest.raises(KeyError) as error:
+        load_example("nope")
+    assert str(error.value).startswith("no example named 'nope'")
+
+
+def test_the_folder_can_be_moved(tmp_path, monkeypatch):
+    (tmp_path / "mine.json").write_text(json.dumps({"name": "My scene", "dimension": 3}))
+    monkeypatch.setenv("MPM_EXAMPLES_DIR", str(tmp_path))
+    assert list_examples() == [{"name": "mine", "title": "My scene", "dimension": 3,
+                                "path": str(tmp_path / "mine.json")}]
+    assert load_example("mine")["name"] == "My scene"
+    with pytest.raises(ExampleNotFound):
+        load_example("two_disks")
+
+
+def test_two_disks_is_the_karamelo_case():
+    """E2: 20 x 20 cells of 0.05, 2 x 2 particles per cell, 416 particles, dt 0.001 to 3.5."""
+    scene = load_scene(DEFAULT_DIR / "two_disks.json")
+    summary = summarize(scene)
+    assert summary.particles_per_body == [208, 208]
+    assert summary.grid_shape == [20, 20]
+    assert summary.estimated_steps == 3500
+    assert (scene.method.scheme, scene.method.transfer, scene.method.flip_ratio) == ("musl", "flip", 1.0)
+    assert [body.initial_velocity for body in scene.bodies] == [[0.1, 0.1], [-0.1, -0.1]]
+
+
+def test_bar_is_review_case_6_1_1_mode_1():
+    """E1 (figure set-up): 16 cells over L = 25, 2 particles per cell, dt = 0.1 h / c with c = 10."""
+    scene = load_scene(DEFAULT_DIR / "bar_vibration.json")
+    h = 25 / 16
+    assert scene.cell_sizes() == (h,)
+    assert summarize(scene).particles == 32
+    assert scene.time.dt == pytest.approx(0.1 * h / math.sqrt(100 / 1))
+    assert scene.time.end == 20.0  # two periods of mode 1
+    assert scene.grid_upper()[0] >= 25 + 2 * h  # room for the free end to move
+    (condition,) = scene.boundary_conditions
+    assert condition.where.lower[0] < 0 < condition.where.upper[0] < h  # only the node at x = 0
+
+
+@pytest.mark.parametrize("path", EXAMPLE_FILES, ids=lambda p: p.stem)
+def test_every_example_runs_its_first_steps(path, tmp_path):
+    from solver import run
+
+    scene = json.loads(path.read_text())
+    dt = summarize(load_scene(scene)).dt
+    scene["time"]["end"] = 20 * dt
+    scene["output"]["frames"] = 2
+    result = run(scene, tmp_path)
+    assert (result.status, result.reason) == ("complete", "finished"), result.message
+    assert result.steps >= 20
