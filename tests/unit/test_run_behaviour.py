@@ -1,0 +1,128 @@
+"""The run loop: time steps, boundary conditions, loads, instability detection and stopping."""
+import math
+
+import h5py
+import numpy as np
+import pytest
+
+from solver import run
+from solver.results import list_frames, read_frame, read_series
+
+E, NU, RHO = 1.0e4, 0.3, 1000.0
+C_DIL = math.sqrt(E * (1 - NU) / ((1 + NU) * (1 - 2 * NU)) / RHO)
+
+
+def block(dim=2, velocity=None, **extra):
+    scene = {
+        "version": 1, "name": "block", "dimension": dim,
+        "grid": {"lower": [-1.0] * dim, "upper": [1.0] * dim, "cell_size": 0.1},
+        "materials": {"m": {"model": "linear_elastic", "density": RHO, "youngs_modulus": E, "poisson_ratio": NU}},
+        "bodies": [{"name": "b", "material": "m", "particles_per_cell": 2,
+                    "geometry": {"type": "box", "lower": [-0.3] * dim, "upper": [0.3] * dim},
+                    "initial_velocity": velocity or [0.0] * dim}],
+        "time": {"end": 0.1, "dt": 1e-3},
+        "output": {"frames": 3, "fields": ["position", "velocity", "stress"]},
+    }
+    scene.update(extra)
+    return scene
+
+
+def test_adaptive_time_step_follows_the_cfl_formula(tmp_path):
+    scene = block(velocity=[0.5, -0.2], time={"end": 0.05, "dt": None, "cfl": 0.4})
+    result = run(scene, tmp_path)
+    assert result.status == "complete"
+    dt = read_series(result.result_path)["dt"][0]
+    # review eq. 2.73: dt = cfl * min_i h_i / (c_dil + max |v_i|); the slowest axis limits it here
+    assert dt == pytest.approx(0.4 * 0.1 / (C_DIL + 0.5), rel=1e-12)
+    assert result.time == pytest.approx(0.05, abs=1e-12)
+
+
+def test_frames_are_evenly_spaced_including_first_and_last(tmp_path):
+    result = run(block(time={"end": 0.1, "dt": 0.003}, output={"frames": 5, "fields": ["position"]}), tmp_path)
+    times = [f["time"] for f in list_frames(result.result_path)]
+    np.testing.assert_allclose(times, np.linspace(0.0, 0.1, 5), atol=1e-12)
+
+
+def test_slip_floor_stops_normal_motion_and_lets_the_body_slide(tmp_path):
+    # a block sliding along a slip floor it rests on: the normal velocity is held at zero, the tangential kept
+    scene = block(velocity=[0.2, 0.0], gravity=[0.0, -9.81],
+                  boundary_conditions=[{"type": "wall", "face": "y-", "mode": "slip"}],
+                  grid={"lower": [-1.0, -0.3], "upper": [1.0, 1.0], "cell_size": 0.1},
+                  time={"end": 0.2, "dt": 2e-4})
+    result = run(scene, tmp_path)
+    last = read_frame(result.result_path)["fields"]
+    bottom = last["position"][:, 1] < -0.25
+    assert last["position"][:, 1].min() > -0.3 - 0.01          # did not fall through the floor
+    assert np.mean(last["velocity"][bottom, 0]) == pytest.approx(0.2, rel=0.02)   # slides freely
+
+
+def test_stick_floor_holds_the_bottom_of_the_body(tmp_path):
+    scene = block(velocity=[0.2, 0.0],
+                  boundary_conditions=[{"type": "wall", "face": "y-", "mode": "stick"}],
+                  grid={"lower": [-1.0, -0.3], "upper": [1.0, 1.0], "cell_size": 0.1},
+                  time={"end": 0.05, "dt": 2e-4})
+    result = run(scene, tmp_path)
+    first, last = read_frame(result.result_path, 0)["fields"], read_frame(result.result_path)["fields"]
+    bottom = first["position"][:, 1] < -0.27
+    order = np.argsort(last["id"])
+    moved = last["position"][order][bottom] - first["position"][bottom]
+    top = first["position"][:, 1] > 0.27
+    assert np.abs(moved[:, 0]).max() < 0.5 * np.abs(last["position"][order][top, 0] - first["position"][top, 0]).mean()
+
+
+def test_prescribed_velocity_expression_in_time_moves_the_constrained_nodes(tmp_path):
+    # the whole grid is constrained to v = (0.3 t, 0): every particle must follow x = x0 + 0.15 t^2
+    scene = block(boundary_conditions=[{"type": "velocity", "where": {"type": "box", "lower": [-2, -2], "upper": [2, 2]},
+                                        "velocity": ["0.3 * t", 0.0]}],
+                  time={"end": 0.2, "dt": 1e-3})
+    result = run(scene, tmp_path)
+    first, last = read_frame(result.result_path, 0)["fields"], read_frame(result.result_path)["fields"]
+    dx = last["position"][np.argsort(last["id"]), 0] - first["position"][:, 0]
+    t, dt = 0.2, 1e-3
+    # x advances with the node velocity at the end of each step: sum of 0.3 (n dt) dt
+    n = round(t / dt)
+    assert dx == pytest.approx(np.full_like(dx, 0.3 * dt * dt * n * (n + 1) / 2), rel=1e-9)
+
+
+def test_body_force_expression_equals_the_same_gravity(tmp_path):
+    a = run(block(gravity=[0.0, -2.0]), tmp_path / "gravity")
+    b = run(block(body_force=["0", "-2 + 0 * x"]), tmp_path / "expression")
+    pa, pb = read_frame(a.result_path)["fields"]["position"], read_frame(b.result_path)["fields"]["position"]
+    np.testing.assert_allclose(pa, pb, atol=1e-14)
+
+
+def test_too_large_a_time_step_is_stopped_with_a_diagnostic(tmp_path):
+    # dt forty times the stable step: the run must stop, name the step and the quantity, keep frames
+    dt = 40 * 0.1 / C_DIL
+    scene = block(velocity=["0.5 * x", "-0.5 * y"], time={"end": 200 * dt, "dt": dt},
+                  output={"frames": 100, "fields": ["position", "velocity"]})
+    result = run(scene, tmp_path)
+    assert result.status == "partial" and result.reason == "unstable"
+    assert "unstable at step" in result.message
+    assert any(q in result.message for q in ("energy", "J = det F", "position", "not finite", "left the grid"))
+    with h5py.File(result.result_path) as h5:
+        assert h5.attrs["status"] == "partial"
+    assert len(list_frames(result.result_path)) >= 1
+    assert result.steps < 200
+
+
+def test_a_particle_leaving_the_grid_is_named(tmp_path):
+    scene = block(velocity=[5.0, 0.0], time={"end": 1.0, "dt": 1e-3})
+    result = run(scene, tmp_path)
+    assert result.reason == "unstable"
+    assert "left the grid" in result.message and "particle" in result.message
+
+
+def test_should_stop_ends_the_run_as_partial(tmp_path):
+    calls = []
+
+    def stop():
+        calls.append(1)
+        return True
+
+    scene = block(time={"end": 50.0, "dt": 1e-4})
+    result = run(scene, tmp_path, should_stop=stop)
+    assert calls and result.status == "partial" and result.reason == "cancelled"
+    assert result.time < 50.0
+    with h5py.File(result.result_path) as h5:
+        assert h5.attrs["status"] == "partial"
