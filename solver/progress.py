@@ -16,6 +16,8 @@ import sys
 import time
 from typing import Any, TextIO
 
+BAR_WIDTH = 24
+
 
 def format_duration(seconds: float | None) -> str:
     """``75 -> "1:15"``, ``3725 -> "1:02:05"``; ``"?"`` when unknown."""
@@ -82,10 +84,9 @@ class ProgressBar:
         text = "  ".join(parts)
         if not self.tty:
             return text
-        width = shutil.get_terminal_size((80, 24)).columns
-        bar_width = max(10, min(40, width - len(text) - 4))
-        filled = int(round(bar_width * fraction))
-        return f"[{'#' * filled}{'-' * (bar_width - filled)}] {text}"[: width - 1]
+        filled = int(round(BAR_WIDTH * fraction))
+        line = f"[{'#' * filled}{'-' * (BAR_WIDTH - filled)}] {text}"
+        return line[: shutil.get_terminal_size((80, 24)).columns - 1]
 
     def _draw(self, line: str) -> None:
         if self.tty:
