@@ -18,7 +18,7 @@ from __future__ import annotations
 import io
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterable
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -49,10 +49,11 @@ DERIVED = {
 }
 
 
-def available_fields(fields: dict[str, np.ndarray]) -> list[str]:
+def available_fields(datasets: Iterable[str]) -> list[str]:
     """The names a preview of a frame with these datasets can be coloured by."""
-    derived = {name for name, (source, _) in DERIVED.items() if source in fields}
-    return sorted(set(fields) | derived)
+    datasets = set(datasets)
+    derived = {name for name, (source, _) in DERIVED.items() if source in datasets}
+    return sorted(datasets | derived)
 
 
 def scalar_values(fields: dict[str, np.ndarray], name: str) -> tuple[np.ndarray, str]:
@@ -132,13 +133,13 @@ def finish_outputs(out_dir: str | os.PathLike, scene: Any) -> Path | None:
     before its first frame).
     """
     result = Path(out_dir) / RESULT_FILE
-    if not list_frames(result):
+    frames = list_frames(result)
+    if not frames:
         return None
-    preview = getattr(getattr(scene, "output", None), "preview", None)
-    wanted = getattr(preview, "field", None)
-    fields = read_frame(result)["fields"]
+    wanted = scene.output.preview.field
     png = Path(out_dir) / PREVIEW_FILE
-    render_preview(result, field=wanted if wanted in available_fields(fields) else None, out=png)
+    field = wanted if wanted in available_fields(frames[-1]["fields"]) else None
+    render_preview(result, field=field, out=png)
     return png
 
 

@@ -306,7 +306,10 @@ def _complete_frames(h5: h5py.File) -> list[str]:
 
 
 def list_frames(path: str | os.PathLike) -> list[dict[str, Any]]:
-    """Every complete frame: ``[{"index", "name", "time", "step", "particles"}]``."""
+    """Every complete frame: ``[{"index", "name", "time", "step", "particles", "fields"}]``.
+
+    ``fields`` lists the frame's dataset names; no particle data is read.
+    """
     with open_result(path) as h5:
         return [
             {
@@ -315,6 +318,7 @@ def list_frames(path: str | os.PathLike) -> list[dict[str, Any]]:
                 "time": float(h5["frames"][name].attrs["time"]),
                 "step": int(h5["frames"][name].attrs["step"]),
                 "particles": int(h5["frames"][name]["position"].shape[0]),
+                "fields": sorted(h5["frames"][name]),
             }
             for index, name in enumerate(_complete_frames(h5))
         ]

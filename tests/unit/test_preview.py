@@ -153,3 +153,9 @@ def test_finish_outputs_without_frames_writes_nothing(tmp_path):
     write(tmp_path, 2, frames=0)
     assert finish_outputs(tmp_path, scene(2)) is None
     assert not (tmp_path / "preview.png").exists()
+
+
+def test_finish_outputs_falls_back_when_the_preview_field_is_not_written(tmp_path):
+    path = write(tmp_path, 2, preview_field="density")  # a valid field, but not in these frames
+    png = finish_outputs(tmp_path, scene(2, preview_field="density"))
+    assert png.read_bytes() == render_preview(path, field="velocity_magnitude")

@@ -177,6 +177,7 @@ def test_readers(tmp_path):
     path = write_result(tmp_path, 2)
     assert [(f["index"], f["time"], f["step"], f["particles"]) for f in list_frames(path)] == [
         (0, 0.0, 0, N), (1, 0.05, 50, N), (2, 0.1, 100, N)]
+    assert list_frames(path)[0]["fields"] == sorted(frame_fields(2, 0))
     last = read_frame(path)
     assert (last["index"], last["name"], last["time"], last["step"]) == (2, "000002", 0.1, 100)
     np.testing.assert_array_equal(last["fields"]["position"], frame_fields(2, 2)["position"])
