@@ -9,7 +9,7 @@ import sys
 
 from celery.signals import worker_ready, worker_shutdown
 
-from worker.celery_app import QUEUE, make_celery
+from worker.celery_app import QUEUE, enqueue, make_celery
 from worker.heartbeat import Heartbeat
 from worker.logs import configure_logging
 from worker.settings import get_settings
@@ -49,7 +49,7 @@ def worker_command(args: argparse.Namespace) -> int:
     app = make_celery(settings)
 
     from worker.tasks import get_store  # the task module registers the task with `app`
-    heartbeat = Heartbeat(get_store(), name)
+    heartbeat = Heartbeat(get_store(), name, lambda job_id: enqueue(app, job_id))
     worker_ready.connect(lambda **_: heartbeat.start(), weak=False)
     worker_shutdown.connect(lambda **_: heartbeat.stop(), weak=False)
 

@@ -1,8 +1,12 @@
-"""A worker's heartbeat in Redis: `/readyz` counts the workers seen recently."""
+"""A worker's heartbeat in Redis (`/readyz` counts the workers seen recently), and the
+recovery of jobs whose worker died: their lease expires, and a live worker puts
+them back on the queue (instead of waiting for the broker's visibility timeout)."""
 from __future__ import annotations
 
 import logging
 import threading
+import time
+from typing import Callable
 
 import redis
 
@@ -13,11 +17,12 @@ log = logging.getLogger("mpm.worker")
 INTERVAL = 2.0
 # A worker not heard from for this long is taken as gone.
 MAX_AGE = 10.0
+ORPHAN_SWEEP_EVERY = 10.0
 
 
 class Heartbeat:
-    def __init__(self, store: JobStore, worker: str):
-        self.store, self.worker = store, worker
+    def __init__(self, store: JobStore, worker: str, enqueue: Callable[[str], None]):
+        self.store, self.worker, self.enqueue = store, worker, enqueue
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._beat, name="mpm-heartbeat", daemon=True)
 
@@ -33,9 +38,16 @@ class Heartbeat:
             pass
 
     def _beat(self) -> None:
+        next_sweep = 0.0
         while not self._stop.is_set():
             try:
                 self.store.heartbeat(self.worker)
+                if time.monotonic() >= next_sweep:
+                    next_sweep = time.monotonic() + ORPHAN_SWEEP_EVERY
+                    for job_id in self.store.requeue_orphans():
+                        log.warning("job requeued: its worker was lost",
+                                    extra={"job_id": job_id, "worker": self.worker})
+                        self.enqueue(job_id)
             except redis.RedisError as exc:
                 log.warning("heartbeat failed: %s", exc, extra={"worker": self.worker})
             self._stop.wait(INTERVAL)

@@ -102,6 +102,24 @@ return 0
 """
 
 
+# KEYS: running index, queued index. ARGV: key prefix.
+# A running job whose lease is gone lost its worker: back to queued. Returns their ids.
+_REQUEUE_ORPHANS = """
+local out = {}
+for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
+  if redis.call('EXISTS', ARGV[1] .. 'job:' .. id .. ':lease') == 0 then
+    local score = redis.call('ZSCORE', KEYS[1], id)
+    redis.call('ZREM', KEYS[1], id)
+    redis.call('ZADD', KEYS[2], score, id)
+    redis.call('HSET', ARGV[1] .. 'job:' .. id, 'status', '"queued"', 'started_at', 'null',
+               'progress', '0.0', 'step', '0')
+    table.insert(out, id)
+  end
+end
+return out
+"""
+
+
 @dataclass
 class Page:
     jobs: list[dict[str, Any]]
@@ -135,6 +153,7 @@ class JobStore:
         self._delete = client.register_script(_DELETE)
         self._renew = client.register_script(_RENEW)
         self._release = client.register_script(_RELEASE)
+        self._requeue_orphans = client.register_script(_REQUEUE_ORPHANS)
 
     # -- records ---------------------------------------------------------------
 
@@ -236,6 +255,12 @@ class JobStore:
 
     def release_lease(self, job_id: str, token: str) -> None:
         self._release(keys=[lease_key(job_id)], args=[token])
+
+    def requeue_orphans(self) -> list[str]:
+        """Running jobs whose lease expired (their worker died) go back to queued;
+        the caller puts them on the queue again."""
+        return self._requeue_orphans(keys=[status_index("running"), status_index("queued")],
+                                     args=[PREFIX])
 
     # -- workers ---------------------------------------------------------------
 

@@ -98,7 +98,8 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     def should_stop() -> str | None:
         nonlocal lease_renewed
         if time.monotonic() - lease_renewed > LEASE_RENEW_EVERY:
-            store.renew_lease(job_id, token, LEASE_SECONDS)
+            if not store.renew_lease(job_id, token, LEASE_SECONDS):
+                return "lease_lost"  # taken as dead (Redis unreachable too long): another worker runs it
             lease_renewed = time.monotonic()
         if _shutting_down.is_set():
             return "shutdown"
@@ -126,6 +127,10 @@ def _finish(store: JobStore, job_id: str, outcome: Outcome, max_job_seconds: flo
         store.transition(job_id, ["running"], "queued", started_at=None, progress=0.0, step=0)
         log.warning("job requeued: the worker is shutting down", extra=extra)
         raise Reject("worker shutting down", requeue=True)
+
+    if outcome.stopped == "lease_lost":
+        log.warning("job abandoned: its lease was lost to another worker", extra=extra)
+        return
 
     final = {"finished_at": now_iso()}
     if outcome.stopped == "cancelled":

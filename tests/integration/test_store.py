@@ -118,3 +118,15 @@ def test_workers_heartbeat(store):
     assert store.live_workers(5) == ["w1"]
     store.worker_gone("w1")
     assert store.live_workers(5) == []
+
+
+def test_running_jobs_without_lease_are_requeued(store):
+    alive, lost = _create(store, 2)
+    for job_id in (alive, lost):
+        store.transition(job_id, ["queued"], "running", progress=0.5)
+    store.acquire_lease(alive, "w1", 30)
+    assert store.requeue_orphans() == [lost]
+    assert store.get(lost)["status"] == "queued" and store.get(lost)["progress"] == 0.0
+    assert store.get(alive)["status"] == "running"
+    assert [j["id"] for j in store.list("queued").jobs] == [lost]
+    assert store.requeue_orphans() == []

@@ -1,0 +1,58 @@
+"""The FastAPI application: `/v1` routes, health, errors, and the dashboard at `/`."""
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+from fastapi import FastAPI
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
+
+from service import errors, health, jobs, scenes
+from service.body_limit import BodySizeLimit
+from service.state import Services
+from worker.logs import configure_logging
+from worker.settings import Settings, get_settings
+
+log = logging.getLogger("mpm.api")
+
+DASHBOARD = Path(__file__).resolve().parent.parent / "clients" / "web"
+PLACEHOLDER = """<!doctype html><html><head><meta charset="utf-8"><title>MPM service</title></head>
+<body><h1>MPM service</h1><p>The dashboard is not installed here.
+The API is at <a href="/docs">/docs</a>.</p></body></html>"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or get_settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        app.state.services = Services.connect(settings)
+        log.info("api started", extra={"redis": settings.redis_url.split("@")[-1],
+                                       "data_dir": str(settings.data_dir)})
+        yield
+        app.state.services.close()
+
+    app = FastAPI(title="MPM simulation service", version="1", lifespan=lifespan,
+                  description="Material point method simulations: submit a scene, follow the job, "
+                              "download the HDF5 result and previews.")
+    errors.install(app)
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.include_router(jobs.router)
+    app.include_router(scenes.router)
+    app.include_router(health.router)
+    if (DASHBOARD / "index.html").is_file():
+        app.mount("/", StaticFiles(directory=DASHBOARD, html=True), name="dashboard")
+    else:
+        @app.get("/", include_in_schema=False)
+        def placeholder() -> HTMLResponse:
+            return HTMLResponse(PLACEHOLDER)
+    return app
+
+
+def app_from_environment() -> FastAPI:
+    """For `uvicorn --factory service.app:app_from_environment` (docker, tests)."""
+    settings = get_settings()
+    configure_logging(settings.log_level)
+    return create_app(settings)

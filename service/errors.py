@@ -1,0 +1,83 @@
+"""Every error answer is `{"error": {"code", "message", "details"}}`; no stack trace
+ever reaches a client (it goes to the server log, with the request)."""
+from __future__ import annotations
+
+import logging
+from typing import Any, Iterable, Sequence
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+log = logging.getLogger("mpm.api")
+
+_CODES = {400: "bad_request", 401: "unauthorized", 403: "forbidden", 404: "not_found",
+          405: "method_not_allowed", 409: "conflict", 413: "too_large", 422: "validation_failed",
+          429: "too_many_jobs", 503: "unavailable"}
+
+
+class ApiError(Exception):
+    def __init__(self, status: int, code: str, message: str, details: Any = None,
+                 headers: dict[str, str] | None = None):
+        super().__init__(message)
+        self.status, self.code, self.message, self.details = status, code, message, details
+        self.headers = headers
+
+
+def error_response(status: int, code: str, message: str, details: Any = None,
+                   headers: dict[str, str] | None = None) -> JSONResponse:
+    return JSONResponse({"error": {"code": code, "message": message, "details": details}},
+                        status_code=status, headers=headers)
+
+
+def format_path(loc: Sequence[Any]) -> str:
+    """("bodies", 1, "geometry", "radius") -> "bodies[1].geometry.radius"."""
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += f".{part}" if out else str(part)
+    return out
+
+
+def validation_error(details: Iterable[dict[str, str]], message: str = "the request is not valid") -> ApiError:
+    return ApiError(422, "validation_failed", message, list(details))
+
+
+def _request_validation(request: Request, exc: RequestValidationError) -> JSONResponse:
+    details = []
+    for error in exc.errors():
+        loc = list(error.get("loc", ()))
+        if loc and loc[0] in ("body", "query", "path"):
+            loc = loc[1:]
+        if error.get("type") == "json_invalid":
+            loc, message = [], f"not valid JSON: {error.get('ctx', {}).get('error', error['msg'])}"
+        else:
+            message = error["msg"]
+        details.append({"path": format_path(loc), "message": message})
+    return error_response(422, "validation_failed", "the request is not valid", details)
+
+
+def _api_error(request: Request, exc: ApiError) -> JSONResponse:
+    return error_response(exc.status, exc.code, exc.message, exc.details, exc.headers)
+
+
+def _http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+    message = exc.detail if isinstance(exc.detail, str) else "error"
+    return error_response(exc.status_code, _CODES.get(exc.status_code, "error"), message,
+                          headers=getattr(exc, "headers", None))
+
+
+def _unexpected(request: Request, exc: Exception) -> JSONResponse:
+    log.error("unhandled error", exc_info=exc,
+              extra={"method": request.method, "path": request.url.path})
+    return error_response(500, "internal_error", "internal error; the server log has the details")
+
+
+def install(app: FastAPI) -> None:
+    app.add_exception_handler(ApiError, _api_error)
+    app.add_exception_handler(RequestValidationError, _request_validation)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
+    app.add_exception_handler(Exception, _unexpected)

@@ -1,0 +1,32 @@
+"""Liveness and readiness."""
+from __future__ import annotations
+
+from typing import Any
+
+import redis
+from fastapi import APIRouter, Depends
+
+from service.errors import error_response
+from service.state import Services, services
+from worker.heartbeat import MAX_AGE
+
+router = APIRouter(tags=["health"])
+
+
+@router.get("/healthz")
+def healthz() -> dict[str, str]:
+    """The API process answers."""
+    return {"status": "ok"}
+
+
+@router.get("/readyz", responses={503: {"description": "Redis unreachable or no worker alive"}})
+def readyz(svc: Services = Depends(services)) -> Any:
+    """Ready to run jobs: Redis answers and at least one worker has been heard from."""
+    try:
+        svc.store.redis.ping()
+        workers = svc.store.live_workers(MAX_AGE)
+    except redis.RedisError as exc:
+        return error_response(503, "not_ready", "Redis is not reachable", {"redis": str(exc)})
+    if not workers:
+        return error_response(503, "not_ready", "no worker is alive", {"redis": "ok", "workers": 0})
+    return {"status": "ready", "redis": "ok", "workers": len(workers)}

@@ -1,0 +1,223 @@
+"""The job routes: submit, list, show, cancel, delete, and the job's files."""
+from __future__ import annotations
+
+import json
+import logging
+import shutil
+from typing import Any, Literal
+
+from fastapi import APIRouter, Depends, Query, Response
+from fastapi.responses import FileResponse
+from pydantic import BaseModel, ConfigDict, Field
+
+from service import results
+from service.errors import ApiError, validation_error
+from service.scenes import check_scene, granted_processes
+from service.state import Services, services
+from worker.celery_app import enqueue
+from worker.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
+from worker.store import FINISHED, STATUSES, CursorError, now_iso
+
+log = logging.getLogger("mpm.api")
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+
+Status = Literal["queued", "running", "succeeded", "failed", "cancelled"]
+
+
+class JobRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    scene: dict[str, Any] = Field(description="the scene document (see GET /v1/schema/scene)")
+    processes: int | None = Field(None, ge=1, description="processes to run it on; capped by the service")
+
+
+class Job(BaseModel):
+    """A job record (docs/internals.md, "The job record")."""
+    model_config = ConfigDict(extra="allow")
+    id: str
+    name: str | None
+    status: Status
+    created_at: str
+    started_at: str | None
+    finished_at: str | None
+    progress: float
+    step: int
+    sim_time: float | None
+    end_time: float | None
+    steps_per_second: float | None
+    eta_seconds: float | None
+    energies: dict[str, float | None]
+    error: str | None
+    processes: int
+    summary: dict[str, Any] | None
+    links: dict[str, str]
+
+
+class JobList(BaseModel):
+    jobs: list[Job]
+    next_cursor: str | None
+
+
+def public(record: dict[str, Any]) -> dict[str, Any]:
+    job = dict(record)
+    base = f"/v1/jobs/{record['id']}"
+    job["links"] = {"self": base, "result": f"{base}/result.h5", "preview": f"{base}/preview.png",
+                    "series": f"{base}/series", "cancel": f"{base}/cancel", "scene": f"{base}/scene"}
+    return job
+
+
+def _job_id(text: str) -> str:
+    try:
+        return parse_job_id(text)
+    except InvalidJobId:
+        raise _not_found(text) from None
+
+
+def _not_found(job_id: str) -> ApiError:
+    return ApiError(404, "not_found", f"no job {job_id}")
+
+
+def _record(svc: Services, job_id: str) -> dict[str, Any]:
+    record = svc.store.get(job_id)
+    if record is None:
+        raise _not_found(job_id)
+    return record
+
+
+@router.post("", status_code=202, response_model=Job,
+             responses={413: {"description": "request over MPM_MAX_BODY_BYTES"},
+                        422: {"description": "every validation error, path and message"},
+                        429: {"description": "MPM_MAX_CONCURRENT_JOBS jobs are queued or running"}})
+def submit_job(body: JobRequest, svc: Services = Depends(services)) -> dict[str, Any]:
+    """Validate the scene, store the job and put it on the queue. A rejected job leaves no trace."""
+    scene_json, summary = check_scene(body.scene, svc.settings)
+    scene = json.loads(scene_json)
+    processes = granted_processes(body.processes, scene, svc.settings)
+    job_id = new_job_id()
+    files = JobFiles(svc.settings.jobs_dir, job_id)
+    files.dir.mkdir(parents=True)
+    try:
+        files.scene.write_text(scene_json, encoding="utf-8")
+        record = {
+            "name": scene.get("name"), "created_at": now_iso(), "started_at": None,
+            "finished_at": None, "progress": 0.0, "step": 0, "sim_time": 0.0,
+            "end_time": scene.get("time", {}).get("end"), "steps_per_second": None,
+            "eta_seconds": None, "energies": {"kinetic": 0.0, "strain": 0.0, "total": 0.0},
+            "error": None, "processes": processes, "summary": summary,
+            "cancel_requested": False, "attempts": 0,
+        }
+        if not svc.store.create(job_id, record, svc.settings.max_concurrent_jobs):
+            raise ApiError(429, "too_many_jobs",
+                           f"{svc.settings.max_concurrent_jobs} jobs are already queued or running",
+                           {"limit": "MPM_MAX_CONCURRENT_JOBS", "max": svc.settings.max_concurrent_jobs},
+                           headers={"Retry-After": "5"})
+        try:
+            enqueue(svc.celery, job_id)
+        except Exception:
+            svc.store.delete(job_id, allowed=STATUSES)
+            raise
+    except BaseException:
+        shutil.rmtree(files.dir, ignore_errors=True)
+        raise
+    log.info("job submitted", extra={"job_id": job_id, "job_name": record["name"],
+                                     "particles": summary.get("particles")})
+    return public(svc.store.get(job_id) or {**record, "id": job_id, "status": "queued"})
+
+
+@router.get("", response_model=JobList)
+def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500),
+              cursor: str | None = None, svc: Services = Depends(services)) -> dict[str, Any]:
+    """Newest first; pass `next_cursor` back as `cursor` for the next page."""
+    try:
+        page = svc.store.list(status, limit, cursor)
+    except CursorError as exc:
+        raise validation_error([{"path": "cursor", "message": str(exc).split(": ", 1)[1]}]) from None
+    return {"jobs": [public(job) for job in page.jobs], "next_cursor": page.next_cursor}
+
+
+@router.get("/{job_id}", response_model=Job)
+def get_job(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]:
+    return public(_record(svc, _job_id(job_id)))
+
+
+@router.post("/{job_id}/cancel", status_code=202, response_model=Job,
+             responses={409: {"description": "the job has already finished"}})
+def cancel_job(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]:
+    """A queued job is cancelled at once; a running one within a few seconds
+    (its solver is stopped, the frames written so far stay readable)."""
+    job_id = _job_id(job_id)
+    before = svc.store.request_cancel(job_id)
+    if before is None:
+        raise _not_found(job_id)
+    if before in FINISHED:
+        raise ApiError(409, "job_finished", f"job {job_id} has already {before}", {"status": before})
+    log.info("job cancel requested", extra={"job_id": job_id, "status": before})
+    return public(_record(svc, job_id))
+
+
+@router.delete("/{job_id}", status_code=204, response_class=Response,
+               responses={409: {"description": "the job has not finished"}})
+def delete_job(job_id: str, svc: Services = Depends(services)) -> Response:
+    """Remove a finished job and its files."""
+    job_id = _job_id(job_id)
+    status = svc.store.delete(job_id)
+    if status is None:
+        raise _not_found(job_id)
+    if status not in FINISHED:
+        raise ApiError(409, "job_not_finished", f"job {job_id} is {status}; cancel it first",
+                       {"status": status})
+    shutil.rmtree(JobFiles(svc.settings.jobs_dir, job_id).dir, ignore_errors=True)
+    log.info("job deleted", extra={"job_id": job_id})
+    return Response(status_code=204)
+
+
+def _result_files(svc: Services, job_id: str, running_too: bool = False) -> tuple[JobFiles, bool]:
+    """The files of a job that has a result file (a partial one counts), and whether
+    the job has finished. A running job's file is offered only when `running_too`."""
+    job_id = _job_id(job_id)
+    status = _record(svc, job_id)["status"]
+    files = JobFiles(svc.settings.jobs_dir, job_id)
+    finished = status in FINISHED
+    if not (finished or (running_too and status == "running")) or not files.result.is_file():
+        raise ApiError(409, "result_not_ready",
+                       f"job {job_id} is {status} and has no result file" + ("" if finished else " yet"),
+                       {"status": status})
+    return files, finished
+
+
+@router.get("/{job_id}/result.h5", response_class=FileResponse,
+            responses={200: {"content": {"application/x-hdf5": {}}},
+                       409: {"description": "no result until the job has finished"}})
+def get_result(job_id: str, svc: Services = Depends(services)) -> FileResponse:
+    """The HDF5 result (partial for a failed or cancelled job)."""
+    files, _ = _result_files(svc, job_id)
+    return FileResponse(files.result, media_type="application/x-hdf5",
+                        filename=f"{files.dir.name}.h5")
+
+
+@router.get("/{job_id}/preview.png", response_class=Response,
+            responses={200: {"content": {"image/png": {}}}, 409: {"description": "no result yet"}})
+def get_preview(job_id: str, frame: int = -1,
+                field: str | None = Query(None, pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,63}$"),
+                svc: Services = Depends(services)) -> Response:
+    """Frame `frame` (negative: from the end) coloured by `field` (default: the scene's
+    preview field). Finished jobs' images are cached; a running job's are drawn each time."""
+    files, finished = _result_files(svc, job_id, running_too=True)
+    png = results.preview(files, frame, field, cache=finished)
+    if isinstance(png, bytes):
+        return Response(png, media_type="image/png", headers={"Cache-Control": "no-store"})
+    return FileResponse(png, media_type="image/png")
+
+
+@router.get("/{job_id}/series")
+def get_series(job_id: str, svc: Services = Depends(services)) -> dict[str, list[float | None]]:
+    """The time series written so far (time, dt, energies...), as lists."""
+    files, _ = _result_files(svc, job_id, running_too=True)
+    return results.series(files)
+
+
+@router.get("/{job_id}/scene")
+def get_scene(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]:
+    """The validated scene of the job."""
+    job_id = _job_id(job_id)
+    _record(svc, job_id)
+    return json.loads(JobFiles(svc.settings.jobs_dir, job_id).scene.read_text(encoding="utf-8"))

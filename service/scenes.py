@@ -1,0 +1,90 @@
+"""Scene validation for the API (solver.scene, solver.summary) and the scene routes:
+validate, the JSON Schema, the built-in examples."""
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+from fastapi import APIRouter, Body, Depends
+
+from solver import capabilities
+from solver.examples import ExampleNotFound, list_examples, load_example
+from solver.scene import Limits, Scene, SceneError, load_scene
+from solver.summary import summarize
+
+from service.errors import ApiError, validation_error
+from service.state import Services, services
+from worker.settings import Settings
+
+router = APIRouter(tags=["scenes"])
+
+
+# The setting behind each limit problem of solver.scene (by its path).
+_LIMIT_SETTINGS = {"bodies": "MPM_MAX_PARTICLES", "grid": "MPM_MAX_GRID_NODES", "time": "MPM_MAX_STEPS"}
+
+
+def check_scene(document: dict[str, Any], settings: Settings) -> tuple[str, dict[str, Any]]:
+    """The validated scene as JSON text, and its summary; 422 with every error.
+
+    The limits (MPM_MAX_PARTICLES, ...) are checked on counts computed from the
+    scene, before anything is allocated; their errors name the setting."""
+    try:
+        scene = load_scene(document)
+    except SceneError as exc:
+        raise validation_error(exc.errors, "the scene is not valid") from None
+    limits = Limits(max_particles=settings.max_particles, max_grid_nodes=settings.max_grid_nodes,
+                    max_steps=settings.max_steps)
+    try:
+        load_scene(scene, limits=limits)
+    except SceneError as exc:
+        details = []
+        for error in exc.errors:
+            setting = _LIMIT_SETTINGS.get(error["path"])
+            message = f"{error['message']} ({setting})" if setting else error["message"]
+            details.append({**error, "message": message, "limit": setting})
+        raise validation_error(details, "the scene is over the service's limits") from None
+    summary = summarize(scene).model_dump(mode="json")
+    return scene.model_dump_json(), summary
+
+
+def granted_processes(requested: int | None, scene: dict[str, Any], settings: Settings) -> int:
+    """The processes a job runs on: what it asks (the request, else the scene), capped by
+    MPM_MAX_PROCESSES and by what the solver supports."""
+    asked = requested or (scene.get("parallel") or {}).get("processes") or 1
+    return max(1, min(asked, settings.max_processes, capabilities.MAX_PROCESSES))
+
+
+@router.post("/v1/scenes/validate",
+             responses={422: {"description": "every validation error, path and message"}})
+def validate_scene(scene: dict[str, Any] = Body(..., description="a scene document"),
+                   svc: Services = Depends(services)) -> dict[str, Any]:
+    """Validate a scene; answer what it implies (particles, nodes, steps, memory, run time)."""
+    _, summary = check_scene(scene, svc.settings)
+    return {"summary": summary}
+
+
+@lru_cache
+def _scene_schema() -> dict[str, Any]:
+    return Scene.model_json_schema()
+
+
+@router.get("/v1/schema/scene")
+def scene_schema() -> dict[str, Any]:
+    """The JSON Schema of a scene document."""
+    return _scene_schema()
+
+
+@router.get("/v1/examples")
+def examples() -> dict[str, Any]:
+    """The built-in example scenes."""
+    return {"examples": [{key: example[key] for key in ("name", "title", "dimension")}
+                         for example in list_examples()]}  # not the server's file paths
+
+
+@router.get("/v1/examples/{name}")
+def example(name: str) -> dict[str, Any]:
+    """One built-in example scene, as a document ready to submit."""
+    try:
+        return load_example(name)
+    except ExampleNotFound as exc:
+        raise ApiError(404, "not_found", str(exc)) from None
