@@ -1,7 +1,6 @@
 """result.h5 and result.xdmf against the layout of INTERFACES.md."""
 import json
 import math
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -240,36 +239,3 @@ def test_xdmf_is_a_temporal_collection_pointing_at_existing_datasets(tmp_path, d
                 "deformation_gradient": "Scalar" if dimension == 1 else "Matrix",
             }
     assert not list(tmp_path.glob(".result.xdmf*"))  # the temporary file of the atomic write is gone
-
-
-PARAVIEW_CHECK = """
-import json, sys
-from paraview.simple import Xdmf3ReaderS
-out = {}
-for path in sys.argv[1:]:
-    reader = Xdmf3ReaderS(FileName=path)
-    reader.UpdatePipeline(time=0.05)
-    data = reader.PointData
-    out[path] = {"points": reader.GetDataInformation().GetNumberOfPoints(),
-                 "times": list(reader.TimestepValues),
-                 "arrays": {data[i].Name: data[i].GetNumberOfComponents() for i in range(len(data))},
-                 "mass": list(data["mass"].GetRange())}
-print("RESULT" + json.dumps(out))
-"""
-
-
-@pytest.mark.skipif(shutil.which("pvpython") is None, reason="ParaView (pvpython) is not installed")
-def test_paraview_opens_the_xdmf(tmp_path):
-    paths = {d: str(write_result(tmp_path / f"{d}d", d).with_suffix(".xdmf")) for d in (1, 2, 3)}
-    script = tmp_path / "check.py"
-    script.write_text(PARAVIEW_CHECK)
-    done = subprocess.run(["pvpython", str(script), *paths.values()], capture_output=True, text=True,
-                          timeout=300, cwd=tmp_path)
-    line = next(line for line in done.stdout.splitlines() if line.startswith("RESULT"))
-    seen = json.loads(line[len("RESULT"):])
-    for dimension, path in paths.items():
-        assert seen[path]["points"] == N
-        assert seen[path]["times"] == TIMES
-        assert seen[path]["mass"] == [0.5, 0.5]
-        assert seen[path]["arrays"]["stress"] == 6
-        assert seen[path]["arrays"]["velocity"] == dimension
