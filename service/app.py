@@ -12,7 +12,6 @@ from fastapi.staticfiles import StaticFiles
 from service import errors, health, jobs, scenes
 from service.body_limit import BodySizeLimit
 from service.state import Services
-from worker.logs import configure_logging
 from worker.settings import Settings, get_settings
 
 log = logging.getLogger("mpm.api")
@@ -50,9 +49,3 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             return HTMLResponse(PLACEHOLDER)
     return app
 
-
-def app_from_environment() -> FastAPI:
-    """For `uvicorn --factory service.app:app_from_environment` (docker, tests)."""
-    settings = get_settings()
-    configure_logging(settings.log_level)
-    return create_app(settings)

