@@ -455,7 +455,7 @@
   // ---------------------------------------------------------------- view: one job
 
   /** Frames and fields a preview can show, from the validated scene (see solver/preview.py). */
-  function previewChoices(scene) {
+  function previewChoices(scene, record) {
     const output = (scene && scene.output) || {};
     const stored = new Set([...(output.fields || ["position", "velocity", "stress"]), "mass"]);
     const fields = new Set(stored);
@@ -463,7 +463,12 @@
     if (stored.has("stress")) { fields.add("von_mises"); fields.add("pressure"); }
     fields.delete("position");
     const preferred = (output.preview && output.preview.field) || "velocity_magnitude";
-    return { frames: output.frames || 1, fields: [...fields].sort(), preferred };
+    // Frames are evenly spaced in time, first and last included; a run that stopped early wrote fewer.
+    let frames = output.frames || 1;
+    if (record && record.status !== "succeeded" && record.end_time > 0 && frames > 1) {
+      frames = Math.min(frames, Math.floor((record.sim_time / record.end_time) * (frames - 1) + 1e-9) + 1);
+    }
+    return { frames, fields: [...fields].sort(), preferred };
   }
 
   function jobView(container, id) {
@@ -492,17 +497,19 @@
       h("label", { class: "slider" }, "Frame", frameSlider, frameLabel),
       h("label", {}, "Field", fieldSelect));
     const plot = h("div", { class: "plot" }, h("div", { class: "placeholder" }, "No energy data yet."));
+    const energyNow = h("dl", { class: "stats energies" });
     const sceneBox = h("div", { class: "scene" }, h("div", { class: "placeholder" }, "Loading…"));
 
     container.replaceChildren(
       h("a", { class: "back", href: "#/jobs" }, "← All jobs"),
       h("section", { class: "card job-head" },
-        h("div", { class: "job-title" }, h("div", {}, title, h("code", { class: "id" }, id)), status),
+        h("div", { class: "job-title" }, h("div", {}, h("div", { class: "title-line" }, title, status),
+          h("code", { class: "id" }, id))),
         h("div", { class: "actions" }, cancel, download, remove),
         progress, stats, errorBox),
       h("div", { class: "columns" },
         h("section", { class: "card" }, h("h2", {}, "Preview"), h("div", { class: "preview-frame" }, image, imageNote), controls),
-        h("section", { class: "card" }, h("h2", {}, "Energy"), plot)),
+        h("section", { class: "card" }, h("h2", {}, "Energy"), plot, energyNow)),
       h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Scene")), sceneBox)));
 
     function renderRecord() {
@@ -523,6 +530,10 @@
         ["Wall time", fmtDuration(wallSeconds(record))],
       ];
       stats.replaceChildren(...rows.map(([k, v]) => h("div", {}, h("dt", {}, k), h("dd", {}, v))));
+      const energies = record.energies || {};
+      energyNow.replaceChildren(...ENERGY_SERIES.map(([, label, colour]) => h("div", {},
+        h("dt", {}, h("i", { class: "swatch", style: `background: ${colour}` }), `${label} now`),
+        h("dd", {}, fmtNumber(energies[label])))));
       errorBox.hidden = !record.error;
       errorBox.replaceChildren(h("strong", {}, "Diagnostic"), h("pre", {}, record.error || ""));
       cancel.disabled = !ACTIVE.has(record.status);
@@ -552,7 +563,7 @@
 
     let previewTimer = null;
     function schedulePreview() {
-      const { frames } = previewChoices(scene);
+      const { frames } = previewChoices(scene, record);
       const frame = Number(frameSlider.value);
       const end = record && record.end_time;
       frameLabel.textContent = `${frame + 1} / ${frames}` +
@@ -562,7 +573,7 @@
     }
 
     function showFinishedControls() {
-      const { frames, fields, preferred } = previewChoices(scene);
+      const { frames, fields, preferred } = previewChoices(scene, record);
       fieldSelect.replaceChildren(...fields.map((f) => h("option", { value: f, selected: f === preferred }, f)));
       frameSlider.max = String(Math.max(0, frames - 1));
       frameSlider.value = frameSlider.max;
