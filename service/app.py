@@ -31,7 +31,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         log.info("api started", extra={"redis": settings.redis_url.split("@")[-1],
                                        "data_dir": str(settings.data_dir)})
         yield
-        app.state.services.close()
+        await app.state.services.close()
 
     app = FastAPI(title="MPM simulation service", version="1", lifespan=lifespan,
                   description="Material point method simulations: submit a scene, follow the job, "

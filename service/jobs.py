@@ -7,7 +7,7 @@ import shutil
 from typing import Any, Literal
 
 from fastapi import APIRouter, Depends, Query, Response
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
 from service import results
@@ -16,7 +16,7 @@ from service.scenes import check_scene, granted_processes
 from service.state import Services, services
 from worker.celery_app import enqueue
 from worker.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
-from worker.store import FINISHED, STATUSES, CursorError, now_iso
+from worker.store import FINISHED, STATUSES, CursorError, JobStore, job_key, now_iso
 
 log = logging.getLogger("mpm.api")
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
@@ -120,7 +120,8 @@ def submit_job(body: JobRequest, svc: Services = Depends(services)) -> dict[str,
         raise
     log.info("job submitted", extra={"job_id": job_id, "job_name": record["name"],
                                      "particles": summary.get("particles")})
-    return public(svc.store.get(job_id) or {**record, "id": job_id, "status": "queued"})
+    # The job as accepted; a worker may already have started it (GET shows that).
+    return public({"id": job_id, "name": record["name"], "status": "queued", **record})
 
 
 @router.get("", response_model=JobList)
@@ -135,8 +136,13 @@ def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500)
 
 
 @router.get("/{job_id}", response_model=Job)
-def get_job(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]:
-    return public(_record(svc, _job_id(job_id)))
+async def get_job(job_id: str, svc: Services = Depends(services)) -> JSONResponse:
+    """One job; the route clients poll, so it reads Redis without leaving the event loop."""
+    job_id = _job_id(job_id)
+    record = JobStore.decode(await svc.async_redis.hgetall(job_key(job_id)))
+    if record is None:
+        raise _not_found(job_id)
+    return JSONResponse(public(record))  # the record is already the answer: no re-validation
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=Job,

@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import redis
+import redis.asyncio
 from celery import Celery
 from fastapi import Request
 
@@ -17,15 +18,19 @@ class Services:
     settings: Settings
     store: JobStore
     celery: Celery
+    # For the hottest route (a job's status, polled by every client): no thread hop.
+    async_redis: redis.asyncio.Redis
 
     @classmethod
     def connect(cls, settings: Settings) -> "Services":
-        client = redis.Redis.from_url(settings.redis_url, decode_responses=True,
-                                      socket_timeout=5, health_check_interval=30)
-        return cls(settings, JobStore(client), make_celery(settings))
+        options = dict(decode_responses=True, socket_timeout=5, health_check_interval=30)
+        client = redis.Redis.from_url(settings.redis_url, **options)
+        return cls(settings, JobStore(client), make_celery(settings),
+                   redis.asyncio.Redis.from_url(settings.redis_url, **options))
 
-    def close(self) -> None:
+    async def close(self) -> None:
         self.store.redis.close()
+        await self.async_redis.aclose()
         self.celery.close()
 
 

@@ -165,7 +165,8 @@ class JobStore:
         return out
 
     @staticmethod
-    def _decode(raw: dict[str, str]) -> dict[str, Any] | None:
+    def decode(raw: dict[str, str]) -> dict[str, Any] | None:
+        """A record from the raw hash (as HGETALL answers it)."""
         return {k: json.loads(v) for k, v in raw.items()} if raw else None
 
     def create(self, job_id: str, fields: dict[str, Any], max_active: int) -> bool:
@@ -178,7 +179,7 @@ class JobStore:
         return bool(done)
 
     def get(self, job_id: str) -> dict[str, Any] | None:
-        return self._decode(self.redis.hgetall(job_key(job_id)))
+        return self.decode(self.redis.hgetall(job_key(job_id)))
 
     def transition(self, job_id: str, allowed: Iterable[str], to: str,
                    **fields: Any) -> str | None:
@@ -240,7 +241,7 @@ class JobStore:
         pipe = self.redis.pipeline(transaction=False)
         for job_id, _ in rows:
             pipe.hgetall(job_key(job_id))
-        jobs = [job for job in map(self._decode, pipe.execute()) if job]
+        jobs = [job for job in map(self.decode, pipe.execute()) if job]
         next_cursor = _encode_cursor(rows[-1][1], rows[-1][0]) if has_more and rows else None
         return Page(jobs, next_cursor)
 
