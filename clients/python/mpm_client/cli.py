@@ -19,7 +19,7 @@ from typing import Callable
 from .client import Client, Job
 from .errors import MpmError
 from .models import STATUSES
-from .progress import format_duration, format_progress
+from .progress import format_progress
 
 Handler = Callable[[argparse.Namespace], int]
 
@@ -125,11 +125,16 @@ def _table(jobs: list[Job]) -> str:
 
 
 def _age(created: datetime | None) -> str:
+    """``"42 s"``, ``"5 min"``, ``"3 h"``, ``"2 d"``: how long ago the job was created."""
     if created is None:
         return ""
     if created.tzinfo is None:
         created = created.replace(tzinfo=timezone.utc)
-    return format_duration((datetime.now(timezone.utc) - created).total_seconds())
+    seconds = max(0, int((datetime.now(timezone.utc) - created).total_seconds()))
+    for unit, size in (("d", 86400), ("h", 3600), ("min", 60)):
+        if seconds >= size:
+            return f"{seconds // size} {unit}"
+    return f"{seconds} s"
 
 
 # -- status ------------------------------------------------------------------------

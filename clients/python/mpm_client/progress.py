@@ -6,6 +6,7 @@ line is printed when the status changes and at most every ``log_interval`` secon
 """
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from typing import TextIO
@@ -51,9 +52,16 @@ class ProgressBar:
         self._drawn = 0
 
     def update(self, record: JobRecord) -> None:
-        line = f"{record.name or record.id[:8]}  {format_progress(record, self.width)}"
+        columns = shutil.get_terminal_size().columns if self._tty else 120
+        progress = format_progress(record, self.width)
+        overflow = len(progress) + 11 - columns  # leave room for at least 8 characters of the name
+        if overflow > 0:  # a narrow terminal: a shorter bar
+            progress = format_progress(record, max(6, self.width - overflow))
+        name = _shorten(record.name or record.id[:8], min(32, max(8, columns - len(progress) - 3)))
+        line = f"{name}  {progress}"
         if self._tty:
-            # pad over the previous, possibly longer, line
+            # one terminal line (a wrapped line cannot be redrawn), padded over the previous one
+            line = line[:columns - 1]
             self.stream.write("\r" + line.ljust(self._drawn))
             self._drawn = len(line)
         else:
@@ -69,3 +77,7 @@ class ProgressBar:
             self.stream.write("\n")
             self.stream.flush()
         self._drawn = 0
+
+
+def _shorten(text: str, width: int) -> str:
+    return text if len(text) <= width else text[:width - 1] + "…"
