@@ -17,39 +17,43 @@ from worker.runner import solver_command
 log = logging.getLogger("mpm.worker")
 
 
-def _tiny_scene(model: str) -> dict:
+def _tiny_scene(dimension: int, model: str) -> dict:
+    """A box of one material moving through a 4-cell grid, for a hundredth of a second."""
     return {
-        "version": 1, "name": f"warm-up {model}", "dimension": 2,
-        "grid": {"lower": [0.0, 0.0], "upper": [1.0, 1.0], "cell_size": 0.25},
+        "version": 1, "name": f"warm-up {dimension}D {model}", "dimension": dimension,
+        "grid": {"lower": [0.0] * dimension, "upper": [1.0] * dimension, "cell_size": 0.25},
         "materials": {"m": {"model": model, "density": 1000.0, "youngs_modulus": 1000.0,
                             "poisson_ratio": 0.3}},
         "bodies": [{"name": "b", "material": "m",
-                    "geometry": {"type": "box", "lower": [0.25, 0.25], "upper": [0.75, 0.75]},
-                    "particles_per_cell": 2, "initial_velocity": [0.1, 0.0]}],
+                    "geometry": {"type": "box", "lower": [0.25] * dimension, "upper": [0.75] * dimension},
+                    "particles_per_cell": 2, "initial_velocity": [0.1] + [0.0] * (dimension - 1)}],
         "time": {"end": 0.01, "dt": 0.001},
         "output": {"frames": 2},
     }
 
 
-WARMUP_MODELS = ("linear_elastic", "neo_hookean")
+# The kernel variants of the built-in examples and of the usual scenes.
+WARMUP = ((1, "linear_elastic"), (2, "linear_elastic"), (2, "neo_hookean"),
+          (3, "linear_elastic"), (3, "neo_hookean"))
 
 
 def warm_up(timeout: float = 600.0) -> None:
     """Run each tiny scene once; a failure is logged, never fatal (jobs then compile)."""
     with tempfile.TemporaryDirectory(prefix="mpm-warmup-") as tmp:
-        for model in WARMUP_MODELS:
-            scene = Path(tmp) / f"{model}.json"
-            scene.write_text(json.dumps(_tiny_scene(model)))
+        for dimension, model in WARMUP:
+            name = f"{dimension}d_{model}"
+            scene = Path(tmp) / f"{name}.json"
+            scene.write_text(json.dumps(_tiny_scene(dimension, model)))
             started = time.monotonic()
+            extra = {"dimension": dimension, "model": model}
             try:
-                done = subprocess.run(solver_command(scene, Path(tmp) / model, progress="none"),
+                done = subprocess.run(solver_command(scene, Path(tmp) / name, progress="none"),
                                       capture_output=True, text=True, timeout=timeout)
             except subprocess.TimeoutExpired:
-                log.warning("warm-up timed out", extra={"model": model})
+                log.warning("warm-up timed out", extra=extra)
                 continue
-            seconds = round(time.monotonic() - started, 2)
+            extra["seconds"] = round(time.monotonic() - started, 2)
             if done.returncode == 0:
-                log.info("warm-up done", extra={"model": model, "seconds": seconds})
+                log.info("warm-up done", extra=extra)
             else:
-                log.warning("warm-up failed", extra={"model": model, "seconds": seconds,
-                                                     "stderr": done.stderr[-2000:]})
+                log.warning("warm-up failed", extra={**extra, "stderr": done.stderr[-2000:]})

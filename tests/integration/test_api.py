@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 
+import httpx
 import pytest
+import redis
 
-from service_support import two_disks
+from service_support import Process, answers, free_port, two_disks, wait_until
 
 
 def _mutate(change):
@@ -198,3 +201,32 @@ def test_logs_are_json_lines(api, stack):
     lines = [line for line in stack.api.log.read_text().splitlines() if line.startswith("{")]
     events = [json.loads(line) for line in lines]
     assert any(e["event"] == "api started" for e in events)
+
+
+def test_quota_429_and_not_ready_without_workers(stack, tmp_path):
+    """An API on a Redis database no worker serves: jobs stay queued, /readyz says why,
+    and past MPM_MAX_CONCURRENT_JOBS a submission is refused without a trace."""
+    port = free_port()
+    env = {**stack.env, "MPM_REDIS_URL": stack.redis_url.rsplit("/", 1)[0] + "/3",
+           "MPM_DATA_DIR": str(tmp_path), "MPM_MAX_CONCURRENT_JOBS": "2"}
+    lonely = Process("api-no-workers", [sys.executable, "-m", "service", "--no-worker", "--port", str(port)],
+                     env, tmp_path).start()
+    url = f"http://127.0.0.1:{port}"
+    try:
+        wait_until(answers(url, "/healthz"), 60, "the second API", processes=(lonely,))
+        with httpx.Client(base_url=url, timeout=30) as api:
+            ready = api.get("/readyz")
+            assert ready.status_code == 503 and ready.json()["error"]["details"]["workers"] == 0
+            accepted = [api.post("/v1/jobs", json={"scene": two_disks(f"q{i}")}) for i in range(2)]
+            assert [a.status_code for a in accepted] == [202, 202]
+            refused = api.post("/v1/jobs", json={"scene": two_disks("one too many")})
+            assert refused.status_code == 429
+            assert refused.json()["error"]["details"]["limit"] == "MPM_MAX_CONCURRENT_JOBS"
+            assert len(api.get("/v1/jobs").json()["jobs"]) == 2
+            assert len(os.listdir(tmp_path / "jobs")) == 2
+            # a cancelled job no longer counts
+            api.post(f"/v1/jobs/{accepted[0].json()['id']}/cancel")
+            assert api.post("/v1/jobs", json={"scene": two_disks("fits again")}).status_code == 202
+    finally:
+        lonely.stop()
+        redis.Redis.from_url(env["MPM_REDIS_URL"]).flushdb()
