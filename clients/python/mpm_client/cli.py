@@ -103,7 +103,7 @@ def register_jobs(subparsers: argparse._SubParsersAction) -> None:
 @_reports_errors
 def _jobs(args: argparse.Namespace) -> int:
     with _client(args) as client:
-        page_size = args.limit if 0 < args.limit <= 100 else None
+        page_size = min(args.limit, 500) or None  # one request for the usual --limit; 0: the server's pages
         jobs = list(islice(client.jobs(status=args.status, limit=page_size), args.limit or None))
         if args.json:
             for job in jobs:
