@@ -27,8 +27,10 @@ def live(pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory) 
     return shared_service(pytestconfig, tmp_path_factory)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser():
+    """Module scope: Playwright's sync API keeps an event loop running in this thread
+    while it is open, and the SDK's async tests that run later need it closed."""
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
