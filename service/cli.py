@@ -13,7 +13,8 @@ import sys
 import uvicorn
 
 from service.app import create_app
-from service.embedded_redis import EmbeddedRedis, die_with_parent
+from service.embedded_redis import EmbeddedRedis
+from worker.runner import die_with_parent
 from worker.logs import configure_logging
 from worker.settings import get_settings
 

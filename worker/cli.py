@@ -49,7 +49,8 @@ def worker_command(args: argparse.Namespace) -> int:
     app = make_celery(settings)
 
     from worker.tasks import get_store  # the task module registers the task with `app`
-    heartbeat = Heartbeat(get_store(), name, lambda job_id: enqueue(app, job_id))
+    heartbeat = Heartbeat(get_store(), name, lambda job_id: enqueue(app, job_id),
+                          sweep_every=settings.lease_seconds / 3)
     worker_ready.connect(lambda **_: heartbeat.start(), weak=False)
     worker_shutdown.connect(lambda **_: heartbeat.stop(), weak=False)
 

@@ -17,12 +17,13 @@ log = logging.getLogger("mpm.worker")
 INTERVAL = 2.0
 # A worker not heard from for this long is taken as gone.
 MAX_AGE = 10.0
-ORPHAN_SWEEP_EVERY = 10.0
 
 
 class Heartbeat:
-    def __init__(self, store: JobStore, worker: str, enqueue: Callable[[str], None]):
+    def __init__(self, store: JobStore, worker: str, enqueue: Callable[[str], None],
+                 sweep_every: float):
         self.store, self.worker, self.enqueue = store, worker, enqueue
+        self.sweep_every = sweep_every
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._beat, name="mpm-heartbeat", daemon=True)
 
@@ -43,7 +44,7 @@ class Heartbeat:
             try:
                 self.store.heartbeat(self.worker)
                 if time.monotonic() >= next_sweep:
-                    next_sweep = time.monotonic() + ORPHAN_SWEEP_EVERY
+                    next_sweep = time.monotonic() + self.sweep_every
                     for job_id in self.store.requeue_orphans():
                         log.warning("job requeued: its worker was lost",
                                     extra={"job_id": job_id, "worker": self.worker})

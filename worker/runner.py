@@ -41,6 +41,14 @@ def solver_command(scene: Path, out_dir: Path, processes: int = 1,
     return command
 
 
+def die_with_parent() -> None:
+    """For `preexec_fn` (Linux): the child gets SIGTERM when the thread that started it
+    dies, so that a killed worker (or `mpm serve`) leaves no solver (or Redis) behind."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 def _kill_group(process: subprocess.Popen, sig: int) -> None:
     try:
         os.killpg(process.pid, sig)
@@ -91,7 +99,8 @@ def run_solver(command: list[str], log_path: Path, *,
     started = time.monotonic()
     with open(log_path, "a", encoding="utf-8") as log:
         process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=log, text=True,
-                                   start_new_session=True, cwd=log_path.parent)
+                                   start_new_session=True, preexec_fn=die_with_parent,
+                                   cwd=log_path.parent)
         reader = threading.Thread(target=_read_lines, args=(process.stdout, lines, log), daemon=True)
         reader.start()
         output_open = True

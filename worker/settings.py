@@ -52,6 +52,8 @@ class Settings(BaseSettings):
     progress_interval: float = Field(0.5, gt=0, description="seconds between job-record updates")
     cancel_grace_seconds: float = Field(10.0, gt=0, description="SIGTERM to SIGKILL on cancel")
     warmup: bool = Field(True, description="compile the solver kernels when a worker starts")
+    lease_seconds: float = Field(30.0, gt=0, description="a running job whose worker is silent this "
+                                                          "long is put back on the queue")
 
     log_level: str = "INFO"
 

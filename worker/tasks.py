@@ -29,8 +29,6 @@ from worker.store import FINISHED, JobStore, now_iso
 
 log = logging.getLogger("mpm.worker")
 
-LEASE_SECONDS = 30.0
-LEASE_RENEW_EVERY = 5.0
 # Keys of the solver's progress line -> fields of the job record.
 PROGRESS_FIELDS = {"fraction": "progress", "step": "step", "time": "sim_time",
                    "end_time": "end_time", "steps_per_second": "steps_per_second",
@@ -62,7 +60,7 @@ def run_job(self, job_id: str) -> None:
         log.info("job skipped: finished or deleted", extra={"job_id": job_id})
         return
     token = f"{worker}:{uuid.uuid4()}"
-    if not store.acquire_lease(job_id, token, LEASE_SECONDS):
+    if not store.acquire_lease(job_id, token, get_settings().lease_seconds):
         log.warning("job skipped: another worker holds it", extra={"job_id": job_id})
         return
     try:
@@ -97,8 +95,8 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
 
     def should_stop() -> str | None:
         nonlocal lease_renewed
-        if time.monotonic() - lease_renewed > LEASE_RENEW_EVERY:
-            if not store.renew_lease(job_id, token, LEASE_SECONDS):
+        if time.monotonic() - lease_renewed > settings.lease_seconds / 6:
+            if not store.renew_lease(job_id, token, settings.lease_seconds):
                 return "lease_lost"  # taken as dead (Redis unreachable too long): another worker runs it
             lease_renewed = time.monotonic()
         if _shutting_down.is_set():

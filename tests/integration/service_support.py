@@ -114,17 +114,27 @@ class Stack:
         self.url = f"http://127.0.0.1:{self.port}"
         self.env = {**os.environ, "MPM_REDIS_URL": self.redis_url, "MPM_DATA_DIR": str(data_dir),
                     "MPM_PROGRESS_INTERVAL": "0.2", "MPM_CANCEL_GRACE_SECONDS": "5",
+                    "MPM_LEASE_SECONDS": "3",
                     "MPM_MAX_PARTICLES": "50000", "MPM_MAX_STEPS": "5000000",
                     "MPM_MAX_BODY_BYTES": "100000",
                     "MPM_MAX_CONCURRENT_JOBS": "40", "PYTHONUNBUFFERED": "1"}
-        self.workers = [
-            Process("worker1", [sys.executable, "-m", "worker", "--name", "w1@test"], self.env, log_dir),
-            # the first worker fills the shared on-disk kernel cache
-            Process("worker2", [sys.executable, "-m", "worker", "--name", "w2@test", "--no-warmup"],
-                    self.env, log_dir),
-        ]
+        self.workers = [self._worker_process(1, warmup=True),
+                        # the first worker fills the shared on-disk kernel cache
+                        self._worker_process(2, warmup=False)]
         self.api = self._api_process()
         self.store = JobStore(redis.Redis.from_url(self.redis_url, decode_responses=True))
+
+    def _worker_process(self, number: int, warmup: bool) -> Process:
+        command = [sys.executable, "-m", "worker", "--name", f"w{number}@test"]
+        return Process(f"worker{number}", command + ([] if warmup else ["--no-warmup"]),
+                       self.env, self.log_dir)
+
+    def restart_worker(self, name: str) -> None:
+        """Start again the worker called `name` (after a test stopped or killed it)."""
+        number = int(name.split("@")[0][1:])
+        self.workers[number - 1] = self._worker_process(number, warmup=False).start()
+        wait_until(lambda: len(self.store.live_workers(10)) == 2, 60, f"worker {name} back",
+                   processes=(self.workers[number - 1],))
 
     def _api_process(self) -> Process:
         return Process("api", [sys.executable, "-m", "service", "--no-worker", "--port", str(self.port)],
