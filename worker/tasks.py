@@ -72,13 +72,6 @@ def run_job(self, job_id: str) -> None:
 def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, token: str) -> None:
     settings = get_settings()
     files = JobFiles(settings.jobs_dir, job_id)
-    if job["status"] == "running":
-        log.warning("job restarted: its worker was lost", extra={"job_id": job_id})
-    # A rerun starts from a clean folder: only the scene is kept.
-    for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
-        stale.unlink(missing_ok=True)
-    shutil.rmtree(files.previews, ignore_errors=True)
-
     before = store.transition(
         job_id, ["queued", "running"], "running", started_at=now_iso(), worker=worker,
         attempts=job.get("attempts", 0) + 1, progress=0.0, step=0, sim_time=0.0,
@@ -86,6 +79,12 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     if before not in ("queued", "running"):
         log.info("job skipped: it is %s", before, extra={"job_id": job_id})
         return
+    if before == "running":
+        log.warning("job restarted: its worker was lost", extra={"job_id": job_id})
+    # A rerun starts from a clean folder: only the scene is kept.
+    for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
+        stale.unlink(missing_ok=True)
+    shutil.rmtree(files.previews, ignore_errors=True)
     if store.cancel_requested(job_id):
         store.transition(job_id, ["running"], "cancelled", finished_at=now_iso())
         return
@@ -93,21 +92,30 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
 
     lease_renewed = time.monotonic()
 
+    # A Redis hiccup must not end a long run: the checks and updates below skip a beat
+    # instead. If Redis stays away longer than the lease, another worker takes the job
+    # over, and this run stops when it finds its lease gone.
     def should_stop() -> str | None:
         nonlocal lease_renewed
-        if time.monotonic() - lease_renewed > settings.lease_seconds / 6:
-            if not store.renew_lease(job_id, token, settings.lease_seconds):
-                return "lease_lost"  # taken as dead (Redis unreachable too long): another worker runs it
-            lease_renewed = time.monotonic()
         if _shutting_down.is_set():
             return "shutdown"
-        if store.cancel_requested(job_id):
-            return "cancelled"
+        try:
+            if time.monotonic() - lease_renewed > settings.lease_seconds / 6:
+                if not store.renew_lease(job_id, token, settings.lease_seconds):
+                    return "lease_lost"
+                lease_renewed = time.monotonic()
+            if store.cancel_requested(job_id):
+                return "cancelled"
+        except redis.RedisError as exc:
+            log.warning("redis unavailable: %s", exc, extra={"job_id": job_id})
         return None
 
     def on_progress(line: dict[str, Any]) -> None:
         fields = {PROGRESS_FIELDS[k]: v for k, v in line.items() if k in PROGRESS_FIELDS}
-        store.update_running(job_id, **fields)
+        try:
+            store.update_running(job_id, **fields)
+        except redis.RedisError as exc:
+            log.warning("progress not recorded: %s", exc, extra={"job_id": job_id})
 
     outcome = run_solver(
         solver_command(files.scene, files.dir, job.get("processes", 1)), files.log,
