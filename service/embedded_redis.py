@@ -6,7 +6,6 @@ is not set, and by the integration tests.
 from __future__ import annotations
 
 import logging
-import os
 import secrets
 import signal
 import socket

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from celery import Celery
 
-from worker.settings import Settings, get_settings
+from worker.settings import Settings
 
 QUEUE = "mpm-jobs"
 TASK_NAME = "mpm.run_job"
