@@ -226,4 +226,7 @@ def get_scene(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]:
     """The validated scene of the job."""
     job_id = _job_id(job_id)
     _record(svc, job_id)
-    return json.loads(JobFiles(svc.settings.jobs_dir, job_id).scene.read_text(encoding="utf-8"))
+    try:
+        return json.loads(JobFiles(svc.settings.jobs_dir, job_id).scene.read_text(encoding="utf-8"))
+    except FileNotFoundError:  # the folder was removed by hand
+        raise ApiError(404, "not_found", f"job {job_id} has no scene file") from None

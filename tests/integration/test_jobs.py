@@ -252,3 +252,31 @@ def test_the_job_of_a_killed_worker_runs_again_on_the_other(api, stack):
         assert final["sim_time"] == pytest.approx(40.0, abs=ONE_STEP)
     finally:
         stack.restart_worker(victim_name)
+
+
+def test_the_two_disks_example_end_to_end_through_the_sdk(stack, tmp_path):
+    """The README's path: the built-in example, submitted with the Python SDK over HTTP."""
+    from mpm_client import Client
+    from mpm_client.errors import JobFailed, ValidationFailed
+
+    with Client(stack.url) as client:
+        scene = client.example("two_disks")
+        assert client.validate(scene).particles > 0
+        job = client.submit(scene).wait(timeout=120, progress=False)
+        assert job.record.status == "succeeded" and job.record.progress == 1.0
+        path = job.download(tmp_path / "two_disks.h5")
+        with h5py.File(path, "r") as h5:
+            assert h5.attrs["status"] == "complete"
+            assert len(h5["frames"]) == scene["output"]["frames"]
+        job.preview(field="von_mises", path=tmp_path / "last.png")
+        assert (tmp_path / "last.png").read_bytes().startswith(b"\x89PNG")
+        assert len(job.series()["time"]) > 1
+        assert job.id in [j.id for j in client.jobs(status="succeeded", limit=2)]
+
+        with pytest.raises(JobFailed, match="unstable at step"):
+            client.submit(unstable("sdk-unstable")).wait(timeout=120, progress=False)
+        bad = two_disks()
+        bad["bodies"][0]["geometry"]["radius"] = 0
+        with pytest.raises(ValidationFailed) as failure:
+            client.submit(bad)
+        assert [e["path"] for e in failure.value.errors] == ["bodies[0].geometry.radius"]
