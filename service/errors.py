@@ -8,6 +8,7 @@ from typing import Any, Iterable, Sequence
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 log = logging.getLogger("mpm.api")
@@ -15,6 +16,22 @@ log = logging.getLogger("mpm.api")
 _CODES = {400: "bad_request", 401: "unauthorized", 403: "forbidden", 404: "not_found",
           405: "method_not_allowed", 409: "conflict", 413: "too_large", 422: "validation_failed",
           429: "too_many_jobs", 503: "unavailable"}
+
+
+class ErrorDetail(BaseModel):
+    code: str
+    message: str
+    details: Any = None
+
+
+class ErrorBody(BaseModel):
+    """Every error answer (for the OpenAPI document)."""
+    error: ErrorDetail
+
+
+def documented(descriptions: dict[int, str]) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI `responses` for error statuses ({status: description}), with the error body."""
+    return {status: {"model": ErrorBody, "description": text} for status, text in descriptions.items()}
 
 
 class ApiError(Exception):

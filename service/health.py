@@ -6,7 +6,7 @@ from typing import Any
 import redis
 from fastapi import APIRouter, Depends
 
-from service.errors import error_response
+from service.errors import documented, error_response
 from service.state import Services, services
 from worker.heartbeat import MAX_AGE
 
@@ -19,7 +19,7 @@ def healthz() -> dict[str, str]:
     return {"status": "ok"}
 
 
-@router.get("/readyz", responses={503: {"description": "Redis unreachable or no worker alive"}})
+@router.get("/readyz", responses=documented({503: "Redis unreachable or no worker alive"}))
 def readyz(svc: Services = Depends(services)) -> Any:
     """Ready to run jobs: Redis answers and at least one worker has been heard from."""
     try:

@@ -11,7 +11,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
 from service import results
-from service.errors import ApiError, validation_error
+from service.errors import ApiError, documented, validation_error
 from service.scenes import check_scene, granted_processes
 from service.state import Services, services
 from worker.celery_app import enqueue
@@ -19,7 +19,8 @@ from worker.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
 from worker.store import FINISHED, STATUSES, CursorError, JobStore, job_key, now_iso
 
 log = logging.getLogger("mpm.api")
-router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"],
+                   responses=documented({404: "no such job", 422: "invalid parameters"}))
 
 Status = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 
@@ -84,9 +85,9 @@ def _record(svc: Services, job_id: str) -> dict[str, Any]:
 
 
 @router.post("", status_code=202, response_model=Job,
-             responses={413: {"description": "request over MPM_MAX_BODY_BYTES"},
-                        422: {"description": "every validation error, path and message"},
-                        429: {"description": "MPM_MAX_CONCURRENT_JOBS jobs are queued or running"}})
+             responses=documented({413: "request over MPM_MAX_BODY_BYTES",
+                                   422: "every validation error, path and message",
+                                   429: "MPM_MAX_CONCURRENT_JOBS jobs are queued or running"}))
 def submit_job(body: JobRequest, svc: Services = Depends(services)) -> dict[str, Any]:
     """Validate the scene, store the job and put it on the queue. A rejected job leaves no trace."""
     scene_json, summary = check_scene(body.scene, svc.settings)
@@ -146,7 +147,7 @@ async def get_job(job_id: str, svc: Services = Depends(services)) -> JSONRespons
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=Job,
-             responses={409: {"description": "the job has already finished"}})
+             responses=documented({409: "the job has already finished"}))
 def cancel_job(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]:
     """A queued job is cancelled at once; a running one within a few seconds
     (its solver is stopped, the frames written so far stay readable)."""
@@ -161,7 +162,7 @@ def cancel_job(job_id: str, svc: Services = Depends(services)) -> dict[str, Any]
 
 
 @router.delete("/{job_id}", status_code=204, response_class=Response,
-               responses={409: {"description": "the job has not finished"}})
+               responses=documented({409: "the job has not finished"}))
 def delete_job(job_id: str, svc: Services = Depends(services)) -> Response:
     """Remove a finished job and its files."""
     job_id = _job_id(job_id)
@@ -192,7 +193,7 @@ def _result_files(svc: Services, job_id: str, running_too: bool = False) -> tupl
 
 @router.get("/{job_id}/result.h5", response_class=FileResponse,
             responses={200: {"content": {"application/x-hdf5": {}}},
-                       409: {"description": "no result until the job has finished"}})
+                       **documented({409: "no result until the job has finished"})})
 def get_result(job_id: str, svc: Services = Depends(services)) -> FileResponse:
     """The HDF5 result (partial for a failed or cancelled job)."""
     files, _ = _result_files(svc, job_id)
@@ -201,7 +202,7 @@ def get_result(job_id: str, svc: Services = Depends(services)) -> FileResponse:
 
 
 @router.get("/{job_id}/preview.png", response_class=Response,
-            responses={200: {"content": {"image/png": {}}}, 409: {"description": "no result yet"}})
+            responses={200: {"content": {"image/png": {}}}, **documented({409: "no result yet"})})
 def get_preview(job_id: str, frame: int = -1,
                 field: str | None = Query(None, pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,63}$"),
                 svc: Services = Depends(services)) -> Response:

@@ -12,7 +12,7 @@ from solver.examples import ExampleNotFound, list_examples, load_example
 from solver.scene import Limits, Scene, SceneError, load_scene
 from solver.summary import summarize
 
-from service.errors import ApiError, validation_error
+from service.errors import ApiError, documented, validation_error
 from service.state import Services, services
 from worker.settings import Settings
 
@@ -55,7 +55,8 @@ def granted_processes(requested: int | None, scene: dict[str, Any], settings: Se
 
 
 @router.post("/v1/scenes/validate",
-             responses={422: {"description": "every validation error, path and message"}})
+             responses=documented({413: "request over MPM_MAX_BODY_BYTES",
+                                   422: "every validation error, path and message"}))
 def validate_scene(scene: dict[str, Any] = Body(..., description="a scene document"),
                    svc: Services = Depends(services)) -> dict[str, Any]:
     """Validate a scene; answer what it implies (particles, nodes, steps, memory, run time)."""
@@ -81,7 +82,7 @@ def examples() -> dict[str, Any]:
                          for example in list_examples()]}  # not the server's file paths
 
 
-@router.get("/v1/examples/{name}")
+@router.get("/v1/examples/{name}", responses=documented({404: "no such example"}))
 def example(name: str) -> dict[str, Any]:
     """One built-in example scene, as a document ready to submit."""
     try:
