@@ -3,7 +3,7 @@
     python benchmarks/service.py            # about 2 minutes; prints a markdown table
 
 It starts its own stack on free ports with a temporary MPM_DATA_DIR: an embedded
-Redis, two workers (`python -m worker`) and the API (`python -m service --no-worker`),
+Redis, two workers (`mpm worker`) and the API (`mpm serve --no-worker`),
 and stops it at the end. Measured:
 
 1. submit -> running with an idle, warm worker (server timestamps: created_at ->
@@ -80,11 +80,12 @@ class Stack:
         env = {**os.environ, "MPM_REDIS_URL": self.redis.url, "MPM_DATA_DIR": str(data_dir),
                "MPM_LOG_LEVEL": "WARNING", "MPM_MAX_CONCURRENT_JOBS": "1000"}
         logs = open(data_dir / "stack.log", "ab")
-        start = lambda *args: subprocess.Popen([sys.executable, "-m", *args], env=env, cwd=ROOT,  # noqa: E731
-                                               stdout=logs, stderr=logs, start_new_session=True)
+        # `python -m solver` is the `mpm` command
+        start = lambda *args: subprocess.Popen([sys.executable, "-m", "solver", *args], env=env,  # noqa: E731
+                                               cwd=ROOT, stdout=logs, stderr=logs, start_new_session=True)
         self.processes = [start("worker", "--name", "bench1@local"),
                           start("worker", "--name", "bench2@local"),
-                          start("service", "--no-worker", "--port", str(port))]
+                          start("serve", "--no-worker", "--port", str(port))]
         deadline = time.monotonic() + 600
         while time.monotonic() < deadline:
             try:

@@ -22,6 +22,8 @@ from service.embedded_redis import EmbeddedRedis
 from worker.store import JobStore
 
 FINISHED = ("succeeded", "failed", "cancelled")
+# The `mpm` command (`python -m solver` is the same dispatcher), as users run it.
+MPM = [sys.executable, "-m", "solver"]
 
 
 def free_port() -> int:
@@ -125,7 +127,7 @@ class Stack:
         self.store = JobStore(redis.Redis.from_url(self.redis_url, decode_responses=True))
 
     def _worker_process(self, number: int, warmup: bool) -> Process:
-        command = [sys.executable, "-m", "worker", "--name", f"w{number}@test"]
+        command = [*MPM, "worker", "--name", f"w{number}@test"]
         return Process(f"worker{number}", command + ([] if warmup else ["--no-warmup"]),
                        self.env, self.log_dir)
 
@@ -137,7 +139,7 @@ class Stack:
                    processes=(self.workers[number - 1],))
 
     def _api_process(self) -> Process:
-        return Process("api", [sys.executable, "-m", "service", "--no-worker", "--port", str(self.port)],
+        return Process("api", [*MPM, "serve", "--no-worker", "--port", str(self.port)],
                        self.env, self.log_dir)
 
     def start(self) -> "Stack":

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import json
 import os
-import sys
 
 import httpx
 import pytest
 import redis
 
-from service_support import Process, answers, free_port, two_disks, wait_until
+from service_support import MPM, Process, answers, free_port, two_disks, wait_until
 
 
 def _mutate(change):
@@ -209,7 +208,7 @@ def test_quota_429_and_not_ready_without_workers(stack, tmp_path):
     port = free_port()
     env = {**stack.env, "MPM_REDIS_URL": stack.redis_url.rsplit("/", 1)[0] + "/3",
            "MPM_DATA_DIR": str(tmp_path), "MPM_MAX_CONCURRENT_JOBS": "2"}
-    lonely = Process("api-no-workers", [sys.executable, "-m", "service", "--no-worker", "--port", str(port)],
+    lonely = Process("api-no-workers", [*MPM, "serve", "--no-worker", "--port", str(port)],
                      env, tmp_path).start()
     url = f"http://127.0.0.1:{port}"
     try:

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import os
 import signal
-import sys
 from pathlib import Path
 
 import httpx
 
-from service_support import (Process, answers, boxed, free_port, long_running, processes_with,
+from service_support import (MPM, Process, answers, boxed, free_port, long_running, processes_with,
                              wait_for_status, wait_until)
 
 
@@ -39,7 +38,7 @@ def _gone(pid: int) -> bool:
 def _serve(tmp_path: Path, port: int) -> Process:
     env = {k: v for k, v in os.environ.items() if not k.startswith("MPM_")}
     env.update(MPM_DATA_DIR=str(tmp_path / "data"), PYTHONUNBUFFERED="1")
-    command = [sys.executable, "-m", "solver", "serve", "--port", str(port)]  # what `mpm serve` runs
+    command = [*MPM, "serve", "--port", str(port)]
     return Process("serve", command, env, tmp_path).start()
 
 
