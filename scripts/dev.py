@@ -48,19 +48,32 @@ def setup() -> None:
     STAMP.write_text(_fingerprint())
 
 
-def ensure_chromium() -> None:
-    """The dashboard tests drive Debian's headless Chromium; install it when it is missing."""
-    if shutil.which("chromium") or shutil.which("chromium-browser"):
+def _has_compose() -> bool:
+    if shutil.which("docker-compose"):
+        return True
+    return bool(shutil.which("docker")) and subprocess.run(
+        ["docker", "compose", "version"], capture_output=True).returncode == 0
+
+
+def ensure_test_tools() -> None:
+    """System tools some tests drive: headless Chromium (dashboard tests) and a compose
+    client (docker-compose.yml must parse). Installed from Debian's packages when missing."""
+    missing = []
+    if not (shutil.which("chromium") or shutil.which("chromium-browser")):
+        missing.append("chromium")
+    if not _has_compose():
+        missing.append("docker-compose")
+    if not missing:
         return
     apt = shutil.which("apt-get")
     if apt is None or os.geteuid() != 0:
-        print("chromium is missing and cannot be installed here (needs root and apt-get): "
-              "the browser tests will fail; install the 'chromium' package", file=sys.stderr)
+        print(f"missing {', '.join(missing)} and cannot install here (needs root and apt-get): "
+              "the tests that use them will fail", file=sys.stderr)
         return
-    print("installing chromium for the dashboard tests (apt-get)", flush=True)
+    print(f"installing {', '.join(missing)} for the tests (apt-get)", flush=True)
     env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
     subprocess.run([apt, "-q", "update"], check=True, env=env, stdout=subprocess.DEVNULL)
-    subprocess.run([apt, "-q", "install", "-y", "--no-install-recommends", "chromium"], check=True, env=env,
+    subprocess.run([apt, "-q", "install", "-y", "--no-install-recommends", *missing], check=True, env=env,
                    stdout=subprocess.DEVNULL)
 
 
@@ -75,7 +88,7 @@ def main() -> int:
     if command == "serve":
         return run([str(BIN / "mpm"), "serve", *extra])
     if command == "test":
-        ensure_chromium()
+        ensure_test_tools()
         code = run([str(PY), "-m", "pytest", *(extra or ["tests"])])
         if code == 5:  # pytest: no tests collected, which is a failure here
             print("no tests were collected", file=sys.stderr)

@@ -28,6 +28,9 @@ ENERGY_GROWTH_LIMIT = 2.0
 ENERGY_FLOOR = 1e-6
 PROGRESS_INTERVAL_S = 0.25
 MAX_SERIES_POINTS = 20_000
+# Times closer than this fraction of a step count as equal (output times, the end time):
+# one tolerance for both, so the last frame and the end are reached on the same step.
+TIME_TOLERANCE = 1e-6
 CHECK_EVERY = 20   # steps between finiteness and energy checks, at most
 
 
@@ -88,7 +91,7 @@ class _FrameSchedule:
         self.next = 0
 
     def due(self, t: float, dt: float) -> bool:
-        return self.next < len(self.times) and t >= self.times[self.next] - 1e-6 * dt
+        return self.next < len(self.times) and t >= self.times[self.next] - TIME_TOLERANCE * dt
 
     def until_next(self, t: float) -> float:
         return self.times[self.next] - t if self.next < len(self.times) else math.inf
@@ -132,7 +135,7 @@ def run(
                 if frames.due(sim.time, dt):
                     writer.write_frame(sim.step_count, sim.time, frame_fields(sim, scene.output.fields))
                     frames.next += 1
-                finished = sim.time >= end - 1e-9 * dt
+                finished = sim.time >= end - TIME_TOLERANCE * dt
                 if finished or sim.step_count % check_every == 0:
                     sim.check_finite()
                     e = sim.energies()
@@ -163,7 +166,7 @@ def run(
                 dt = fixed_dt or sim.stable_time_step(scene.time.cfl)
                 # land exactly on output times and on the end time
                 to_frame = frames.until_next(sim.time)
-                dt = min(dt, to_frame) if to_frame > 1e-6 * dt else dt
+                dt = min(dt, to_frame) if to_frame > TIME_TOLERANCE * dt else dt
                 sim.advance(dt)
         except Instability as err:
             reason, message = "unstable", str(err)
