@@ -66,6 +66,7 @@ class ExplicitMPM:
         self.step_count = 0
         self.external_work = 0.0
         self.boundary_work = 0.0
+        self._acceleration = None   # the body acceleration of the last step
 
     # -- the step ---------------------------------------------------------------
 
@@ -81,7 +82,7 @@ class ExplicitMPM:
         p, g, s = self.particles, self.grid, self.stencil
         self._interpolation_weights()                                   # phi_I(x_p), grad phi_I(x_p)
         g.reset()
-        acc = self.loads.acceleration(p, self.time)
+        acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
                     g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
@@ -99,7 +100,7 @@ class ExplicitMPM:
         p, g, s = self.particles, self.grid, self.stencil
         self._interpolation_weights()
         g.reset()
-        acc = self.loads.acceleration(p, self.time)
+        acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
@@ -116,7 +117,7 @@ class ExplicitMPM:
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
         self._impose(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
-        acc = self.loads.acceleration(p, self.time)
+        acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
@@ -146,11 +147,11 @@ class ExplicitMPM:
             material.update_stress(p, sl, dt)
 
     def _account_external_work(self, dt: float) -> None:
+        """Work of the body acceleration the step applied (not evaluated again), with the new velocities."""
         if not self.loads.any:
             return
         p = self.particles
-        acc = self.loads.acceleration(p, self.time)
-        self.external_work += dt * float(np.sum(p.mass[:, None] * acc * p.v))
+        self.external_work += dt * float(np.sum(p.mass[:, None] * self._acceleration * p.v))
 
     def _fail(self, index: int, quantity: str, detail: str) -> None:
         raise Instability(self.step_count + 1, self.time, int(self.particles.id[index]), quantity, detail)
