@@ -1,7 +1,7 @@
 """Struct-of-arrays state of particles and grid, allocated for what a scene needs."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -25,6 +25,9 @@ class Particles:
     id: np.ndarray         # (n,) int64, stable over the run
     body: np.ndarray       # (n,) int32, index into scene.bodies
     X: np.ndarray | None = None   # (n, dim) reference position, only when a body force needs it
+    # Per-particle state only some models need (plastic strain, temperature,
+    # internal energy, ...), by name, each (n, ...); allocated with `require`.
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def count(self) -> int:
@@ -33,6 +36,32 @@ class Particles:
     @property
     def dimension(self) -> int:
         return self.x.shape[1]
+
+    def require(self, name: str, tail: tuple[int, ...] = (), fill: float = 0.0) -> np.ndarray:
+        """The extra per-particle array `name`, allocated (filled with `fill`) on first use."""
+        if name not in self.extra:
+            self.extra[name] = np.full((self.count, *tail), fill)
+        return self.extra[name]
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Every per-particle array by name, the extra ones as "extra/<name>".
+
+        Whatever moves or stores whole particles (checkpoints, migration between
+        processes) goes through this, so a new quantity is never left behind.
+        """
+        out = {f.name: getattr(self, f.name) for f in fields(self)
+               if f.name != "extra" and getattr(self, f.name) is not None}
+        out.update({f"extra/{name}": a for name, a in self.extra.items()})
+        return out
+
+    def take(self, order: np.ndarray) -> None:
+        """Keep the particles `order` (indices), in that order, in every array."""
+        for name, a in self.arrays().items():
+            kept = np.ascontiguousarray(a[order])
+            if name.startswith("extra/"):
+                self.extra[name[len("extra/"):]] = kept
+            else:
+                setattr(self, name, kept)
 
 
 @dataclass
