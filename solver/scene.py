@@ -320,10 +320,22 @@ class Fluid(_Material):
     bulk_modulus: Positive
     gamma: Positive = 7.0
     viscosity: NonNegative = 0.0
+    # None: the fluid takes any tension; a number: the pressure never falls below
+    # -tension_cutoff (0: no tension at all, a free surface cavitates instead).
+    tension_cutoff: NonNegative | None = None
 
     def dilatational_wave_speed(self) -> float:
         """sqrt(bulk_modulus * gamma / density): dp/drho of the Tait EOS at rest."""
         return math.sqrt(self.bulk_modulus * self.gamma / self.density)
+
+
+class ArtificialViscosity(_Model):
+    """q = rho L_e (quadratic L_e D_kk^2 - linear a D_kk) in compression ([R] eq. 5.35):
+    von Neumann-Richtmyer's quadratic and Landshoff's linear term; 0 and 0 turn it off.
+    The defaults are the usual bulk viscosity of explicit codes (1.5^2 and 0.06)."""
+
+    quadratic: NonNegative = 2.25
+    linear: NonNegative = 0.06
 
 
 class IdealGas(_Material):
@@ -331,6 +343,7 @@ class IdealGas(_Material):
 
     model: Literal["ideal_gas"]
     gamma: Annotated[float, Strict(), Field(gt=1)] = 1.4
+    artificial_viscosity: ArtificialViscosity = Field(default_factory=ArtificialViscosity)
 
     def sound_speed(self, density: float, pressure: float) -> float:
         """sqrt(gamma p / rho); the wave speed depends on the body's state."""

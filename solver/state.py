@@ -149,7 +149,8 @@ def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
     volume0 = np.ascontiguousarray(seeds.volume[order])
     n = x.shape[0]
 
-    density = np.array([scene.materials[b.material].density for b in scene.bodies])
+    # a gas has no density of its own: its bodies give it
+    density = np.array([b.initial_density or scene.materials[b.material].density for b in scene.bodies])
     mass = volume0 * density[body]
     v = np.zeros((n, dim))
     names = ("x", "y", "z")[:dim]
@@ -181,5 +182,9 @@ def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
     return particles, slices
 
 
-def make_materials(scene, slices: dict[str, slice]) -> list[tuple[object, slice]]:
-    return [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
+def make_materials(scene, slices: dict[str, slice], particles: Particles) -> list[tuple[object, slice]]:
+    made = [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
+    for material, sl in made:
+        if hasattr(material, "start"):
+            material.start(scene, particles, sl)
+    return made
