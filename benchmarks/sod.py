@@ -1,0 +1,103 @@
+"""Sod's shock tube (E4) against the exact Riemann solution, with and without artificial viscosity.
+
+    python benchmarks/sod.py
+
+Runs examples/sod_shock_tube.json (300 cells, 3 particles per cell, t = 0.2) with
+its artificial viscosity, without it, and with the viscosity at larger time steps
+(cfl 0.1 and 0.5), and prints the table of docs/benchmarks.md "Sod": L1 density
+error, the left plateau pressure, shock and contact positions (in cells) and the
+wall time. Writes docs/images/sod.png: density, velocity and pressure at the
+particles against the exact solution, and the pressure mapped to the grid and back.
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "verification"))
+
+from exact_riemann import SOD_RIGHT  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from mpm_cases import Case  # noqa: E402
+from test_sod_shock_tube import EXACT, H, X0, sod_scene  # noqa: E402
+
+from solver import run  # noqa: E402
+
+IMAGES = ROOT / "docs" / "images"
+
+
+def measure(case) -> dict:
+    frame = case.frame(-1)
+    f = frame["fields"]
+    order = np.argsort(f["position"][:, 0])
+    x = f["position"][order, 0]
+    rho, u, p = f["density"][order], f["velocity"][order, 0], f["pressure"][order]
+    body = f["body"][order]
+    t = frame["time"]
+    waves = EXACT.wave_positions(t, X0)
+    exact_rho, _, _ = EXACT.sample(x, t, X0)
+    left = (x > waves["left_tail"] + 5 * H) & (x < waves["contact"] - 5 * H)
+    contact = 0.5 * (x[body == 0].max() + x[body == 1].min())
+    shock = x[p > 0.5 * (EXACT.p_star + SOD_RIGHT.p)].max()
+    return dict(x=x, rho=rho, u=u, p=p, smooth=f["pressure_smoothed"][order], t=t,
+                l1=float(np.mean(np.abs(rho - exact_rho))),
+                plateau=float(np.median(p[left]) / EXACT.p_star - 1),
+                shock=(shock - waves["right_head"]) / H, contact=(contact - waves["contact"]) / H)
+
+
+def main() -> int:
+    variants = [("with viscosity, cfl 0.025", True, 0.025), ("without viscosity, cfl 0.025", False, 0.025),
+                ("with viscosity, cfl 0.1", True, 0.1), ("with viscosity, cfl 0.5", True, 0.5)]
+    rows = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        for label, av, cfl in variants:
+            scene = sod_scene(av)
+            scene["time"]["cfl"] = cfl
+            scene["output"]["fields"].append("pressure_smoothed")
+            start = time.perf_counter()
+            case = Case(run(scene, tmp / label.replace(" ", "_").replace(",", "")))
+            wall = time.perf_counter() - start
+            rows[label] = dict(measure(case), wall=wall, steps=case.result.steps)
+    print("| run | L1 density error | left plateau p / p* - 1 | shock (cells) | contact (cells) | steps | wall time (s) |")
+    print("|---|---|---|---|---|---|---|")
+    for label, r in rows.items():
+        print(f"| {label} | {r['l1']:.4f} | {r['plateau']:+.3f} | {r['shock']:+.2f} | {r['contact']:+.2f} | "
+              f"{r['steps']} | {r['wall']:.1f} |")
+    plot(rows)
+    return 0
+
+
+def plot(rows: dict) -> None:
+    figure = Figure(figsize=(13.0, 7.5), dpi=90)
+    FigureCanvasAgg(figure)
+    xs = np.linspace(0, 1, 2001)
+    with_av, without = rows["with viscosity, cfl 0.025"], rows["without viscosity, cfl 0.025"]
+    exact = EXACT.sample(xs, with_av["t"], X0)
+    names = ("density", "velocity", "pressure")
+    for column, (name, key, reference) in enumerate(zip(names, ("rho", "u", "p"), exact)):
+        for row, (r, title) in enumerate(((without, "without artificial viscosity"), (with_av, "with artificial viscosity"))):
+            ax = figure.add_subplot(2, 3, 3 * row + column + 1)
+            ax.plot(r["x"], r[key], ".", ms=2, label="particles")
+            if key == "p" and row == 1:
+                ax.plot(r["x"], r["smooth"], "-", lw=0.8, label="through the grid")
+            ax.plot(xs, reference, "k-", lw=0.8, label="exact")
+            ax.set_title(f"{name}, {title}", fontsize=9)
+            ax.grid(alpha=0.3)
+            if column == 2:
+                ax.legend(fontsize=7)
+    figure.suptitle(f"Sod's shock tube at t = {with_av['t']:.3g}: 300 cells, 3 particles per cell, MUSL, FLIP")
+    figure.tight_layout()
+    IMAGES.mkdir(parents=True, exist_ok=True)
+    figure.savefig(IMAGES / "sod.png", dpi=90)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
