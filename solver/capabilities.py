@@ -6,7 +6,7 @@ feature listed there but not here is rejected at validation with a
 adds it here in the same change.
 """
 
-FORMULATIONS = frozenset({"ulmpm"})
+FORMULATIONS = frozenset({"ulmpm", "tlmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
 SHAPE_FUNCTIONS = frozenset({"linear"})
 TRANSFERS = frozenset({"flip", "pic"})
