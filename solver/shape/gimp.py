@@ -1,24 +1,28 @@
-"""GIMP: uGIMP and cpGIMP (review 3.3, eqs. 3.10-3.14; Bardenhagen & Kober 2004).
+"""GIMP: uGIMP and cpGIMP (review 3.3, eqs. 3.6-3.14; Bardenhagen & Kober 2004).
 
 A particle is a box of side l_p per axis; its weight on node I is the average of
-the hat function N_I over the box (eq. 3.9). In 1D, with d = (x_p - x_I)/h and
-l = l_p / h <= 1 (eq. 3.12):
+the hat function N_I over the box, phi_I = (1/l_p) int_box N_I (eq. 3.9), the
+tensor product over the axes in 2D and 3D. With M_I the antiderivative of N_I
+and the box [a, b] along an axis,
 
-    phi(d) = 1 - (4 d^2 + l^2) / (4 l)    |d| < l/2
-           = 1 - |d|                      l/2 <= |d| <= 1 - l/2
-           = (1 + l/2 - |d|)^2 / (2 l)    1 - l/2 < |d| < 1 + l/2
-           = 0                            otherwise
+    phi_I = (M_I(b) - M_I(a)) / (b - a),
+    dphi_I/dx_p = (N_I(b) b' - N_I(a) a' - phi_I (b' - a')) / (b - a),
 
-three nodes per axis; the tensor product in 2D and 3D. The functions are C1, so
-the force on a node changes continuously as a particle crosses a cell face.
+which is eqs. 3.12-3.13 written piece-free (the same values: the tests check
+them against the printed pieces). Three nodes per axis for l_p <= h; the
+functions are C1, so the force on a node changes continuously as a particle
+crosses a cell face.
 
 uGIMP ("gimp") keeps the initial box, l_p = h / particles_per_cell of the body.
 cpGIMP ("cpgimp") stretches it with the diagonal of F, l_p = l_p0 |F_aa|
-(eq. 3.14), capped at h where the formula stops being valid.
+(eq. 3.14), capped at h where three nodes stop sufficing.
 
-The grid needs no ghost nodes as long as each particle's box stays inside the
-grid: a node beyond the grid end would only get weight from the part of a box
-that lies outside. A particle whose box leaves the grid is reported as outside.
+Grid ends: the review adds ghost cells (its Fig. 30). Here the part of a box
+beyond a grid end is cut off instead (a = max(x_p - l_p/2, lower), a' = 0 when
+cut), so a particle pressed against a wall keeps a partition of unity on the
+nodes that exist, at the price of linear reproduction for that particle (its
+weights centre on the cut box). A particle whose centre leaves the grid is
+reported as outside.
 """
 from __future__ import annotations
 
@@ -29,7 +33,6 @@ from solver.shape.tensor import scatter
 
 SUPPORT = 3
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
-_TOUCH = 1e-9              # a box may touch the grid end up to round-off (in cells)
 
 
 def prepare(scene, particles) -> None:
@@ -50,40 +53,37 @@ def evaluate(spec, x, particles, grid, stencil) -> int:
 
 def evaluate_contiguous(spec, x, particles, grid, stencil) -> int:
     """cpGIMP: the boxes stretched along the axes by the diagonal of F."""
-    length = stretched(particles.extra[LENGTH], particles.F, grid.h)
+    length = stretched(particles.extra[LENGTH], particles.F)
     return weights(spec, x, length, grid.lower, grid.inv_h, grid.cells, grid.strides,
                    stencil.idx, stencil.w, stencil.dw)
 
 
 @njit(cache=True)
-def stretched(length0, F, h):
+def stretched(length0, F):
     n, dim = length0.shape
     out = np.empty((n, dim))
     for p in range(n):
         for a in range(dim):
-            out[p, a] = min(length0[p, a] * abs(F[p, a, a]), h[a])
+            out[p, a] = length0[p, a] * abs(F[p, a, a])
     return out
 
 
 @njit(cache=True)
-def gimp_1d(d, l):
-    """(phi, dphi/dd) of eq. 3.12-3.13 in cell units."""
-    a = abs(d)
-    sign = 1.0 if d >= 0.0 else -1.0
-    if a < 0.5 * l:
-        return 1.0 - (4.0 * d * d + l * l) / (4.0 * l), -2.0 * d / l
-    if a <= 1.0 - 0.5 * l:
-        return 1.0 - a, -sign
-    if a < 1.0 + 0.5 * l:
-        r = 1.0 + 0.5 * l - a
-        return r * r / (2.0 * l), -sign * r / l
-    return 0.0, 0.0
+def hat_and_integral(y):
+    """N(y) = max(0, 1 - |y|) and its antiderivative M(y) = int_-1^y N, in cell units."""
+    if y <= -1.0:
+        return 0.0, 0.0
+    if y <= 0.0:
+        return 1.0 + y, 0.5 * (1.0 + y) ** 2
+    if y <= 1.0:
+        return 1.0 - y, 1.0 - 0.5 * (1.0 - y) ** 2
+    return 0.0, 1.0
 
 
 @njit(cache=True)
 def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw):
     """The shape-function interface with one more argument: `length` (n, dim), the
-    current box sides l_p."""
+    current box sides l_p (capped at h)."""
     n = x.shape[0]
     dim = len(spec[0])
     base = np.empty(dim, dtype=np.int64)
@@ -92,15 +92,23 @@ def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw):
     for p in range(n):
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
-            l = max(length[p, a] * inv_h[a], 1e-12)
-            if not (s - 0.5 * l >= -_TOUCH and s + 0.5 * l <= cells[a] + _TOUCH):   # also catches NaN
+            if not (s >= 0.0 and s <= cells[a]):   # also catches NaN
                 return p
-            # the three nodes nearest x_p; at a grid end the one beyond it has weight 0
+            half = 0.5 * min(max(length[p, a] * inv_h[a], 1e-12), 1.0)
+            lo, hi = s - half, s + half              # the box, cut at the grid ends
+            dlo, dhi = 1.0, 1.0
+            if lo < 0.0:
+                lo, dlo = 0.0, 0.0
+            if hi > cells[a]:
+                hi, dhi = float(cells[a]), 0.0
+            # the three nodes nearest x_p (a box of side <= h touches no other)
             b = min(max(int(s + 0.5) - 1, 0), cells[a] - 2)
             base[a] = b
             for j in range(3):
-                phi, dphi = gimp_1d(s - (b + j), l)
+                n_hi, m_hi = hat_and_integral(hi - (b + j))
+                n_lo, m_lo = hat_and_integral(lo - (b + j))
+                phi = (m_hi - m_lo) / (hi - lo)
                 w1[a, j] = phi
-                g1[a, j] = dphi * inv_h[a]
+                g1[a, j] = (n_hi * dhi - n_lo * dlo - phi * (dhi - dlo)) / (hi - lo) * inv_h[a]
         scatter(p, 3, base, w1, g1, strides, idx, w, dw)
     return -1

@@ -180,12 +180,46 @@ def test_cpgimp_boxes_follow_the_stretch():
     assert dict(zip(u.idx[0], u.w[0]))[2] == pytest.approx(9 / 64, abs=1e-14)
 
 
-@pytest.mark.parametrize("name", ["quadratic_bspline", "gimp"])
-def test_particles_needing_a_node_beyond_the_grid_are_reported(name):
+def test_quadratic_bspline_particles_needing_a_node_beyond_the_grid_are_reported():
     grid = make_grid(2)
     x = grid.lower + np.array([[3.0, 3.0], [3.0, 0.1], [2.0, 2.0]]) * grid.h
-    outside, _ = evaluate(name, x, grid)
+    outside, _ = evaluate("quadratic_bspline", x, grid)
     assert outside == 1
+
+
+@pytest.mark.parametrize("name", ["gimp", "cpgimp"])
+def test_gimp_boxes_are_cut_at_the_grid_ends(name):
+    """A box crossing a grid end (a particle pressed against a wall) is cut there: the
+    weights stay a partition of unity with gradients summing to 0, on existing nodes;
+    only a particle whose centre leaves the grid is reported."""
+    grid = make_grid(1, cells=4)
+    s = np.array([0.0, 0.1, 0.2499, 3.9, 4.0])
+    x = grid.lower + s[:, None] * grid.h
+    outside, st = evaluate(name, x, grid)
+    assert outside == -1
+    np.testing.assert_allclose(st.w.sum(axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(st.dw.sum(axis=1), 0.0, atol=1e-12 * grid.inv_h[0])
+    # the cut box [lower, x + l/2] averages N_0 = 1 - y: at s = 0 the box is [0, 1/4], weight 1 - 1/8
+    assert st.w[0, 0] == pytest.approx(1 - 1 / 8)
+    outside, _ = evaluate(name, grid.lower[None] - 0.01 * grid.h, grid)
+    assert outside == 0
+
+
+def test_gimp_matches_the_printed_pieces():
+    """The piece-free form equals eqs. 3.12-3.13 for l_p = h/2 at every distance."""
+    grid = make_grid(1, cells=6)
+    l = 0.5
+    s = np.linspace(1.6, 4.4, 281)
+    x = grid.lower + s[:, None] * grid.h
+    _, st = evaluate("gimp", x, grid)
+    d = s[:, None] - st.idx            # (x_p - x_I) / h for the stencil nodes
+    a = np.abs(d)
+    phi = np.select([a < l / 2, a <= 1 - l / 2, a < 1 + l / 2],
+                    [1 - (4 * d**2 + l**2) / (4 * l), 1 - a, (1 + l / 2 - a) ** 2 / (2 * l)], 0.0)
+    dphi = np.select([a < l / 2, a <= 1 - l / 2, a < 1 + l / 2],
+                     [-8 * d / (4 * l), -np.sign(d), -np.sign(d) * (1 + l / 2 - a) / l], 0.0) * grid.inv_h[0]
+    np.testing.assert_allclose(st.w, phi, atol=1e-14)
+    np.testing.assert_allclose(st.dw[:, :, 0], dphi, atol=1e-12 * grid.inv_h[0])
 
 
 @pytest.mark.parametrize("name", ALL)
