@@ -178,3 +178,17 @@ def vortex_displacement(X: np.ndarray, t: float) -> np.ndarray:
     a = vortex_angle(np.hypot(X[:, 0], X[:, 1]), t)
     c, s = np.cos(a), np.sin(a)
     return np.stack([(c - 1) * X[:, 0] - s * X[:, 1], s * X[:, 0] + (c - 1) * X[:, 1]], axis=1)
+
+
+# --------------------------------------------------------------------------- examples/
+
+def example_scenes() -> dict[str, dict]:
+    """The manufactured-solution scenes of examples/ (file stem -> scene), kept equal
+    to these builders by tests/unit/test_manufactured.py."""
+    flip = Options(flip_ratio=1.0, frames=41)   # [R] 6 uses pure FLIP unless it says otherwise
+    return {
+        "mms_segment_1d": cube_scene(1, 1 / 32, 0.05, flip),
+        "mms_square_2d": cube_scene(2, 1 / 16, 0.05, Options(shape="cubic_bspline", frames=41)),
+        "mms_cube_3d": cube_scene(3, 1 / 8, 0.05, Options(frames=41)),
+        "vortex_2d": vortex_scene(0.05, Options(shape="bernstein", frames=41)),
+    }
