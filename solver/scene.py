@@ -741,7 +741,7 @@ def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
     if least is not None and min(scene.grid_shape()) < least:
         return [("grid.cell_size", f"{name!r} needs at least {least} cells per axis, "
                                    f"the grid has {list(scene.grid_shape())}")]
-    if name != "quadratic_bspline" or scene.method.formulation != "ulmpm":
+    if name != "quadratic_bspline":
         return []
     problems = []
     half = 0.5 * np.array(scene.cell_sizes())
