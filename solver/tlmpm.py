@@ -16,7 +16,7 @@ cell-crossing noise and no particle ever leaves the grid; x_p is still advanced
 for output and for body forces written in x, y, z. There is no inherent contact
 between bodies (review 2.6).
 
-Everything else (grid update, boundary conditions, PIC/FLIP, time step,
+Everything else (grid update, boundary conditions, PIC/FLIP/APIC, time step,
 energies) is the one of `ExplicitMPM`: the kernels only ever see (idx, w, dw).
 """
 from __future__ import annotations
@@ -48,11 +48,13 @@ class TotalLagrangianMPM(ExplicitMPM):
         first_piola(p.F, p.stress, self.piola)                          # P = J sigma F^-T
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume0, self.piola, acc,
                     g.mass, g.momentum, g.force)                        # lines 9-12: (mv)_I, f_I with V0, P
+        self._affine_p2g()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17
         self._impose(g.v_old)                                           # line 15
         self.boundary_work += self._impose(g.v_new)
         g.momentum.fill(0.0)
+        self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, True, g.momentum)                 # lines 18-19, 28: v_p, (mv)_I, x_p
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)
@@ -66,9 +68,11 @@ class TotalLagrangianMPM(ExplicitMPM):
         first_piola(p.F, p.stress, self.piola)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume0, self.piola, acc,
                     g.mass, g.momentum, g.force)
+        self._affine_p2g()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
+        self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
         self._update_stress(dt, g.v_new)                                # from v~_I^{t+dt}
@@ -77,6 +81,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         p, g, s = self.particles, self.grid, self.stencil
         g.reset()
         kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+        self._affine_p2g()
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
         self._impose(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
@@ -86,6 +91,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
+        self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
 
@@ -97,6 +103,18 @@ class TotalLagrangianMPM(ExplicitMPM):
         outside = shape.evaluate(self.shape, self.spec, p.X, p, g, s)
         if outside >= 0:
             self._fail(outside, "reference position", "lies outside the grid")
+
+    # APIC in the reference configuration: C_p is the affine velocity field in X,
+    # v(X) = v_p + C_p (X - X_p), the weights having been evaluated at X_p.
+
+    def _affine_p2g(self) -> None:
+        if self.affine is not None:
+            self.affine.p2g(self.spec, self.stencil, self.particles, self.particles.X, self.grid.momentum)
+
+    def _affine_g2p(self, v_grid: np.ndarray, double_map: bool) -> None:
+        if self.affine is not None:
+            self.affine.g2p(self.spec, self.stencil, self.particles, self.particles.X, v_grid, double_map,
+                            self.grid.momentum)
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil

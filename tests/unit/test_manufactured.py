@@ -76,3 +76,14 @@ def test_square_force_balances_the_motion(t):
 @pytest.mark.parametrize("name", sorted(example_scenes()))
 def test_example_files_are_the_builders_scenes(name):
     assert json.loads((DEFAULT_DIR / f"{name}.json").read_text()) == example_scenes()[name]
+
+
+def test_vortex_starts_with_the_exact_velocity():
+    rng = np.random.default_rng(3)
+    R, theta = rng.uniform(0.75, 1.25, 20), rng.uniform(0, 2 * np.pi, 20)
+    X = np.stack([R * np.cos(theta), R * np.sin(theta)], axis=1)
+    dt = 1e-6
+    exact = (vortex_displacement(X, dt) - vortex_displacement(X, -dt)) / (2 * dt)
+    got = np.stack([compile_expression(e, ("x", "y")).evaluate(x=X[:, 0], y=X[:, 1])
+                    for e in vortex_scene(0.1)["bodies"][0]["initial_velocity"]], axis=1)
+    assert np.allclose(got, exact, rtol=1e-6, atol=1e-9)
