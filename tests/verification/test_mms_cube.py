@@ -9,7 +9,7 @@ Bernstein), >= 1.5 (hat), with the source's PIC/FLIP blend 0.99.
 The levels 1/8, 1/16, 1/32 are in the asymptotic range for all three functions;
 1/4 is not for the cubic B-spline (4 cells: every node is a boundary-modified
 one) nor for Bernstein (2 elements): benchmarks/convergence.py gives local orders
-1.7 and 1.6 from 1/4 to 1/8, then 1.9-2.0 down to 1/64.
+1.7 and 1.6 from 1/4 to 1/8, then 1.8-2.0 down to 1/32.
 """
 import pytest
 

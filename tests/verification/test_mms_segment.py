@@ -4,7 +4,8 @@ u(X, t) = G sin(pi X) sin(c pi t) over one period T = 0.02 s, neo-Hookean, the b
 force of [R](A.8), v = 0 at both ends. [R] Fig. 69 reports order 2 for TLMPM at
 both amplitudes; the oracle of VERIFICATION_CASES E5 is a fitted slope of log e1
 against log h of at least 1.8. The coarse levels 1/8, 1/16, 1/32 are already in the
-asymptotic range (benchmarks/convergence.py: local orders 2.00 from 1/8 to 1/256).
+asymptotic range (local orders 2.00 on every halving from 1/8 down to 1/256,
+measured with these scenes; benchmarks/convergence.py covers 1/8 to 1/128).
 
 [R] §6 uses pure FLIP (flip_ratio 1) unless stated otherwise; with 0.99 the PIC
 share damps the solution by a fixed fraction per step, an error that grows with
