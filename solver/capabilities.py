@@ -6,10 +6,10 @@ feature listed there but not here is rejected at validation with a
 adds it here in the same change.
 """
 
-FORMULATIONS = frozenset({"ulmpm"})
+FORMULATIONS = frozenset({"ulmpm", "tlmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
-SHAPE_FUNCTIONS = frozenset({"linear"})
-TRANSFERS = frozenset({"flip", "pic"})
+SHAPE_FUNCTIONS = frozenset({"linear", "gimp", "cpgimp", "quadratic_bspline", "cubic_bspline", "bernstein"})
+TRANSFERS = frozenset({"flip", "pic", "apic"})
 MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "fluid", "ideal_gas"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})

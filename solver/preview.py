@@ -147,9 +147,9 @@ def finish_outputs(out_dir: str | os.PathLike, scene: Any) -> Path | None:
 
 
 def _extent(scene: dict[str, Any], position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The grid box, or (grid-less scenes) the particles' bounding box with a margin."""
+    """The grid box, or (no grid box: tlmpm may leave it out) the particles' bounding box with a margin."""
     grid = scene.get("grid")
-    if grid:
+    if grid and grid.get("lower") is not None and grid.get("upper") is not None:
         return np.asarray(grid["lower"], dtype=float), np.asarray(grid["upper"], dtype=float)
     finite = position[np.all(np.isfinite(position), axis=1)]
     if len(finite) == 0:

@@ -20,6 +20,7 @@ from solver.preview import finish_outputs
 from solver.results import ResultWriter
 from solver.scene import Scene, load_scene
 from solver.stepper import ExplicitMPM, Instability
+from solver.tlmpm import TotalLagrangianMPM
 
 # An energy above this many times what went in (initial energy plus the work of
 # loads and boundary conditions) can only come from a numerical blow-up.
@@ -114,7 +115,8 @@ def run(
     out_dir.mkdir(parents=True, exist_ok=True)
     started = wallclock.perf_counter()
 
-    sim = ExplicitMPM(scene)
+    stepper = TotalLagrangianMPM if scene.method.formulation == "tlmpm" else ExplicitMPM
+    sim = stepper(scene)
     end = scene.time.end
     frames = _FrameSchedule(end, scene.output.frames)
     series_every = _series_stride(scene, sim)

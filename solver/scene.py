@@ -175,7 +175,7 @@ def _upper_above_lower(upper: list[float] | None, info: ValidationInfo) -> list[
 class Method(_Model):
     formulation: Literal["ulmpm", "tlmpm"] = "ulmpm"
     scheme: Literal["musl", "usl", "usf"] = "musl"
-    shape_function: Literal["linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein"] = "linear"
+    shape_function: Literal["linear", "gimp", "cpgimp", "cubic_bspline", "quadratic_bspline", "bernstein"] = "linear"
     transfer: Literal["flip", "pic", "apic"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
 
@@ -194,12 +194,20 @@ class Method(_Model):
     def _shape_function_allowed(cls, value: str, info: ValidationInfo) -> str:
         # Bernstein functions are only C0 across cells: [R] 3.5 recommends them for TLMPM only.
         if value == "bernstein" and info.data.get("formulation") == "ulmpm":
-            raise _error("'bernstein' is only supported with formulation 'tlmpm'")
+            raise _error("'bernstein' is only supported with formulation 'tlmpm': its gradient jumps across "
+                         "element ends and it does not interpolate, so particles that move across elements "
+                         "(as they do in ulmpm) get the cell-crossing force noise; tlmpm evaluates it once, "
+                         "in the reference configuration")
         return _require_supported(value, "SHAPE_FUNCTIONS")
 
     @field_validator("transfer")
     @classmethod
-    def _transfer_supported(cls, value: str) -> str:
+    def _transfer_supported(cls, value: str, info: ValidationInfo) -> str:
+        # see solver/transfer.py: C_p = sum v~_I grad w^T is unbounded on nearly empty nodes
+        if value == "apic" and info.data.get("shape_function") == "linear":
+            raise _error("'apic' does not work with 'linear' hat functions: the affine matrix takes the "
+                         "unbounded accelerations of nearly empty nodes, whose hat gradients do not vanish, "
+                         "and the run blows up; use gimp, quadratic_bspline or cubic_bspline")
         return _require_supported(value, "TRANSFERS")
 
 
@@ -614,7 +622,10 @@ class Scene(_Model):
         else:
             upper = self._bodies_box()[1] + 2 * np.array(self.cell_sizes())
         cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
-        return tuple(max(1, math.ceil(n - 1e-9)) for n in cells)
+        cells = [max(1, math.ceil(n - 1e-9)) for n in cells]
+        if self.method.shape_function == "bernstein":   # its elements span two cells
+            cells = [n + n % 2 for n in cells]
+        return tuple(cells)
 
     def grid_upper(self) -> tuple[float, ...]:
         return tuple(lo + n * h for lo, n, h in zip(self.grid_lower(), self.grid_shape(), self.cell_sizes()))
@@ -677,6 +688,9 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         if scene.method.formulation == "ulmpm" and grid_ok and geometry_ok:
             problems += _outside_grid(f"{path}.geometry", body, scene)
 
+    if grid_ok and scene.grid.lower is not None and scene.grid.upper is not None:
+        problems += _shape_function_problems(scene)
+
     walls: dict[str, int] = {}
     for i, condition in enumerate(scene.boundary_conditions):
         path = f"boundary_conditions[{i}]"
@@ -728,6 +742,29 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
                                                  "use initial_velocity for deformable bodies"))
         else:
             length_ok(f"{path}.velocity", body.velocity)
+    return problems
+
+
+def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
+    """Grids too small for a function's stencil; bodies too close to the grid ends
+    for quadratic B-splines (no boundary-modified variant: a particle within h/2 of
+    a grid end would need a node beyond it)."""
+    name = scene.method.shape_function
+    least = {"cubic_bspline": 3, "quadratic_bspline": 2, "gimp": 2, "cpgimp": 2}.get(name)
+    if least is not None and min(scene.grid_shape()) < least:
+        return [("grid.cell_size", f"{name!r} needs at least {least} cells per axis, "
+                                   f"the grid has {list(scene.grid_shape())}")]
+    if name != "quadratic_bspline":
+        return []
+    problems = []
+    half = 0.5 * np.array(scene.cell_sizes())
+    grid_lower, grid_upper = np.array(scene.grid_lower()), np.array(scene.grid_upper())
+    for i, body in enumerate(scene.bodies):
+        lower, upper = body.geometry.shape().bounding_box()
+        if np.any(lower < grid_lower + half - 1e-9 * half) or np.any(upper > grid_upper - half + 1e-9 * half):
+            problems.append((f"bodies[{i}].geometry", "with 'quadratic_bspline' a body must keep half a cell "
+                                                      "from the grid ends (its particles would need nodes "
+                                                      "beyond the grid); enlarge the grid"))
     return problems
 
 

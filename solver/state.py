@@ -119,7 +119,7 @@ def make_grid(scene) -> Grid:
     cells = np.asarray(scene.grid_shape(), dtype=np.int64)
     n_nodes = int(np.prod(cells + 1))
     return Grid(
-        lower=np.asarray(scene.grid.lower, dtype=np.float64),
+        lower=np.asarray(scene.grid_lower(), dtype=np.float64),
         h=np.asarray(scene.cell_sizes(), dtype=np.float64),
         cells=cells,
         mass=np.zeros(n_nodes),

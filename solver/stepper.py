@@ -14,6 +14,7 @@ from solver import kernels, shape
 from solver.boundary import Constraints
 from solver.loads import BodyLoads
 from solver.state import make_grid, make_materials, make_particles, make_stencil
+from solver.transfer import AffineTransfer
 
 # Nodes whose mass is below this fraction of the lightest particle's mass get no
 # acceleration (review eq. 2.63, see kernels.integrate_nodes). MUSL and USF take
@@ -54,6 +55,9 @@ class ExplicitMPM:
         self.shape = shape.get(method.shape_function)
         self.stencil = make_stencil(self.particles.count, scene.dimension, self.shape.SUPPORT)
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
+        shape.prepare(self.shape, scene, self.particles)
+        # APIC: PIC velocities plus the affine matrix C_p (solver/transfer.py)
+        self.affine = AffineTransfer(self.particles, self.grid) if method.transfer == "apic" else None
         self.constraints = Constraints(scene, self.grid)
         self.loads = BodyLoads(scene)
         if self.loads.needs_reference:
@@ -89,11 +93,13 @@ class ExplicitMPM:
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
                     g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
+        self._affine_p2g()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17: v_I^t, v~_I^{t+dt}
         self._impose(g.v_old)                                           # line 15
         self.boundary_work += self._impose(g.v_new)
         g.momentum.fill(0.0)
+        self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, True, g.momentum)                 # lines 18-20: x_p, v_p, (mv)_I again
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)   # line 24: v_I^{t+dt}
@@ -106,9 +112,11 @@ class ExplicitMPM:
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
+        self._affine_p2g()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
+        self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)                # particles from v_I^{t+dt}
         self._update_stress(dt, g.v_new)                                # stress last, from v_I^{t+dt}
@@ -118,6 +126,7 @@ class ExplicitMPM:
         self._interpolation_weights()
         g.reset()
         kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+        self._affine_p2g()
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
         self._impose(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
@@ -126,6 +135,7 @@ class ExplicitMPM:
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
+        self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
 
@@ -133,9 +143,18 @@ class ExplicitMPM:
 
     def _interpolation_weights(self) -> None:
         p, g, s = self.particles, self.grid, self.stencil
-        outside = self.shape.weights(self.spec, p.x, g.lower, g.inv_h, g.cells, g.strides, s.idx, s.w, s.dw)
+        outside = shape.evaluate(self.shape, self.spec, p.x, p, g, s)
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _affine_p2g(self) -> None:
+        if self.affine is not None:
+            self.affine.p2g(self.spec, self.stencil, self.particles, self.particles.x, self.grid.momentum)
+
+    def _affine_g2p(self, v_grid: np.ndarray, double_map: bool) -> None:
+        if self.affine is not None:
+            self.affine.g2p(self.spec, self.stencil, self.particles, self.particles.x, v_grid, double_map,
+                            self.grid.momentum)
 
     def _impose(self, v: np.ndarray) -> float:
         c = self.constraints

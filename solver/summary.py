@@ -18,7 +18,7 @@ from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, IdealGas, Scene
 from solver.seeding import count_particles
 
 # Grid nodes per axis that one particle touches, per shape function.
-SUPPORT_NODES = {"linear": 2, "gimp": 3, "quadratic_bspline": 3, "bernstein": 3, "cubic_bspline": 4}
+SUPPORT_NODES = {"linear": 2, "gimp": 3, "cpgimp": 3, "quadratic_bspline": 3, "bernstein": 3, "cubic_bspline": 4}
 
 # Assumed solver throughput in particle-steps per second (one process): a rough
 # figure for the order of magnitude of the run time, not a measurement.
