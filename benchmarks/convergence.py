@@ -1,6 +1,7 @@
 """Speed against error: manufactured solutions over refinements, for every method.
 
-    python benchmarks/convergence.py            # the docs' tables (< 20 min on the dev machine)
+    python benchmarks/convergence.py            # the docs' tables (< 20 min on an idle core: the
+                                                #  step times below add up to about 10 min)
     python benchmarks/convergence.py --quick    # 2-3 coarse levels, linear/cubic/Bernstein only (a few min)
 
 For each case (E5 unit segment, E6 unit square, E7 vortex: solver/manufactured.py)
@@ -72,7 +73,7 @@ CASES = [
     Case("vortex", "E7 generalized vortex (2D, t in [0, 1] s)",
          lambda h, o, end=None: with_grid_box(vortex_scene(h, o, **({"end": end} if end else {}))),
          vortex_displacement,
-         [0.1, 0.05, 0.025], [0.1, 0.05], 1.0),
+         [0.1, 0.05, 1 / 30], [0.1, 0.05], 1.0),
 ]
 
 SHAPES = ["linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein"]
