@@ -36,8 +36,8 @@ def solver_command(scene: Path, out_dir: Path, processes: int = 1,
                    progress: str = "json") -> list[str]:
     command = [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out_dir),
                "--progress", progress]
-    if processes > 1:
-        command = ["mpiexec", "-n", str(processes), *command]
+    if processes > 1:   # the solver turns itself into mpiexec with K ranks (same pid, same group)
+        command += ["-n", str(processes)]
     return command
 
 
