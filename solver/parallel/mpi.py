@@ -48,6 +48,7 @@ class SlabDomain:
         self.cuts = even_cuts(int(self.cells[self.axis]), self.processes)
         self._material = material_of_body(scene)
         self._failure: Exception | None = None
+        self.halo_bytes = 0   # sent by sum_ghosts and share_nodes so far (benchmarks/scaling.py)
         self._plan()
 
     # -- slabs --------------------------------------------------------------------
@@ -175,6 +176,7 @@ class SlabDomain:
         the local values, peer by peer in rank order (so sums are the same every run)."""
         sent = [np.concatenate([self._layers(a, lo, hi).ravel() for a in node_arrays]) for _, lo, hi in send]
         requests = [self.comm.Isend(buf, dest=peer, tag=HALO_TAG) for (peer, _, _), buf in zip(send, sent)]
+        self.halo_bytes += sum(buf.nbytes for buf in sent)
         for peer, lo, hi in receive:
             views = [self._layers(a, lo, hi) for a in node_arrays]
             buf = np.empty(sum(v.size for v in views))

@@ -7,7 +7,11 @@ touches) and a numba kernel
 
 filling, for every particle p and every node k of its stencil, the flat node
 index idx[p, k], the weight w[p, k] and the gradient dw[p, k, :]. It returns the
-index of the first particle outside the grid, or -1. `spec` makes the
+index of the first particle outside the grid, or -1. Node numbers must be
+sum_a i_a * strides[a] with i_a the node's index along axis a of the whole grid
+(lower, cells), and a particle in cell i may touch nodes i - (S-1)//2 ...
+i + ceil(S/2) only (S = SUPPORT): with several processes the kernel is called
+with the strides of a process's slab of the grid (solver/parallel). `spec` makes the
 dimension and stencil size compile-time constants (kernels.stencil_spec). The transfer kernels only
 ever see idx, w and dw, so they are the same for every shape function.
 """
