@@ -52,15 +52,17 @@ def test_a_two_process_job_gives_the_single_process_answer(api, stack):
 def test_cancelling_a_two_process_job_stops_every_rank(api, stack):
     job = submit(api, long_running("two-process-cancel"), 2)
     wait_for_status(api, job["id"], ("running",))
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 120
     while api.get(f"/v1/jobs/{job['id']}").json()["step"] == 0 and time.monotonic() < deadline:
         time.sleep(0.1)
+    # rank 0 reported steps: every rank is in the time loop, where a stop ends the run cleanly
+    assert api.get(f"/v1/jobs/{job['id']}").json()["step"] > 0
     # mpiexec (the exec'd `mpm run -n 2`) and its two ranks, each with the job's scene path
     assert len(processes_with(job["id"])) >= 3
 
     assert api.post(f"/v1/jobs/{job['id']}/cancel").status_code == 202
     final = wait_for_status(api, job["id"], timeout=20)
-    assert final["status"] == "cancelled" and 0 < final["progress"] < 1
+    assert final["status"] == "cancelled"
     deadline = time.monotonic() + 10
     while processes_with(job["id"]) and time.monotonic() < deadline:
         time.sleep(0.1)
