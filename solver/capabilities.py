@@ -15,7 +15,7 @@ GEOMETRIES = frozenset({"box", "sphere", "cylinder", "union", "difference", "int
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})
 WALL_MODES = frozenset({"stick", "slip"})
 AXISYMMETRIC = False
-MAX_PROCESSES = 1
+MAX_PROCESSES = 64   # MPI ranks (solver/parallel); the service caps jobs further (MPM_MAX_PROCESSES)
 
 # Output fields the solver can write per particle (id, body and mass are always written).
 OUTPUT_FIELDS = frozenset({

@@ -17,6 +17,7 @@ import dataclasses
 import json
 import math
 import numbers
+import os
 import sys
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -119,8 +120,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     scene = _load(args.scene, args.processes)
     if scene is None:
         return EXIT_INVALID
+    from solver import parallel
+
+    if scene.parallel.processes > 1 and parallel.launch.world() is None:
+        _exec_processes(scene.parallel.processes, args)   # becomes mpiexec: does not return
     out_dir = Path(args.output) if args.output else Path("out") / Path(args.scene).stem
     from solver import run  # numba and the kernels load only for a run
+
+    if not parallel.is_root():   # with several processes rank 0 reports, the others compute
+        return EXIT_OK if run(scene, out_dir).status == "complete" else EXIT_PARTIAL
 
     progress: Callable[[Any], None] | None = None
     bar = ProgressBar() if args.progress == "bar" else None
@@ -145,6 +153,19 @@ def cmd_run(args: argparse.Namespace) -> int:
         return EXIT_OK
     print(f"mpm run: the run ended early ({done['reason']}): {done['message']}", file=sys.stderr)
     return EXIT_PARTIAL
+
+
+def _exec_processes(processes: int, args: argparse.Namespace) -> None:
+    """Replace this process by `mpiexec -n K` running the same command in each rank
+    (same pid: a signal to this process reaches mpiexec, which forwards it to the ranks)."""
+    from solver.parallel import launch
+
+    out = ["-o", args.output] if args.output else []
+    command = launch.command(processes, ["run", args.scene, *out, "-n", str(processes),
+                                         "--progress", args.progress])
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.execve(command[0], command, launch.environment())
 
 
 # -- mpm validate ------------------------------------------------------------

@@ -2,7 +2,9 @@
 
 It owns what happens between steps: the time step size, the output frames,
 the energy time series, the instability checks, progress reports and
-cooperative stopping (a callback, SIGTERM or SIGINT).
+cooperative stopping (a callback, SIGTERM or SIGINT). With several processes
+every one runs this loop on its slab (sim.domain): decisions are collective,
+rank 0 writes the result file and reports progress.
 """
 from __future__ import annotations
 
@@ -17,7 +19,6 @@ from typing import Callable
 from solver import __version__
 from solver.fields import frame_fields
 from solver.preview import finish_outputs
-from solver.results import ResultWriter
 from solver.scene import Scene, load_scene
 from solver.stepper import ExplicitMPM, Instability
 from solver.tlmpm import TotalLagrangianMPM
@@ -117,6 +118,7 @@ def run(
 
     stepper = TotalLagrangianMPM if scene.method.formulation == "tlmpm" else ExplicitMPM
     sim = stepper(scene)
+    domain = sim.domain
     end = scene.time.end
     frames = _FrameSchedule(end, scene.output.frames)
     series_every = _series_stride(scene, sim)
@@ -130,12 +132,13 @@ def run(
     last_energies = {}
     dt = fixed_dt or sim.stable_time_step(scene.time.cfl)
 
-    writer = ResultWriter(out_dir, scene, __version__)
+    writer = domain.writer(out_dir, scene, __version__)   # a ResultWriter on rank 0
     with writer, _StopSignals() as signals:
         try:
             while True:
                 if frames.due(sim.time, dt):
-                    writer.write_frame(sim.step_count, sim.time, frame_fields(sim, scene.output.fields))
+                    fields = domain.gather(frame_fields(sim, scene.output.fields))   # sorted by id
+                    writer.write_frame(sim.step_count, sim.time, fields)
                     frames.next += 1
                 finished = sim.time >= end - TIME_TOLERANCE * dt
                 if finished or sim.step_count % check_every == 0:
@@ -157,11 +160,11 @@ def run(
                     reason, message = "max_steps", f"stopped at time.max_steps = {scene.time.max_steps}"
                     break
                 now = wallclock.perf_counter()
-                if now - last_report >= PROGRESS_INTERVAL_S:
+                if domain.root_says(now - last_report >= PROGRESS_INTERVAL_S):
                     last_report = now
-                    if progress is not None:
+                    if progress is not None and domain.is_root:
                         progress(_progress(sim, end, dt, started, now, last_energies))
-                    if signals.requested or (should_stop is not None and should_stop()):
+                    if domain.any(signals.requested or (should_stop is not None and should_stop())):
                         reason, message = "cancelled", f"stopped on request at step {sim.step_count}"
                         break
 
@@ -175,12 +178,13 @@ def run(
         status = "complete" if reason == "finished" else "partial"
         writer.close(status)
 
-    finish_outputs(out_dir, scene)
+    if domain.is_root:
+        finish_outputs(out_dir, scene)
     wall = wallclock.perf_counter() - started
-    if progress is not None:
+    if progress is not None and domain.is_root:
         progress(_progress(sim, end, dt, started, wallclock.perf_counter(), last_energies))
     return Result(status=status, reason=reason, message=message, steps=sim.step_count, time=sim.time,
-                  wall_seconds=wall, particles=sim.particles.count,
+                  wall_seconds=wall, particles=int(domain.sum(sim.particles.count)),
                   result_path=str(out_dir / "result.h5"), out_dir=str(out_dir))
 
 

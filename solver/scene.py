@@ -38,6 +38,7 @@ from pydantic_core import PydanticCustomError
 from solver import capabilities
 from solver import geometry as geometry_shapes
 from solver.expressions import ExpressionError, compile_expression
+from solver.parallel.slabs import scene_problems as slab_problems
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")
@@ -558,6 +559,8 @@ class Output(_Model):
 
 class Parallel(_Model):
     processes: Annotated[int, Strict(), Field(ge=1)] = 1  # a request; the service may cap it
+    # slabs are balanced by particle counts at the start and every N steps; 0: even slabs, never moved
+    rebalance_every: Annotated[int, Strict(), Field(ge=0)] = 100
 
     @field_validator("processes")
     @classmethod
@@ -666,6 +669,10 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
                 problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
                 grid_ok = False
 
+    if scene.parallel.processes > 1 and scene.method.formulation == "tlmpm":
+        problems.append(("parallel.processes", "formulation 'tlmpm' runs on one process for now: the "
+                         "decomposition splits the current configuration, TLMPM's grid is the reference one"))
+
     length_ok("gravity", scene.gravity)
     if length_ok("body_force", scene.body_force):
         expressions_ok("body_force", scene.body_force, BODY_FORCE_VARIABLES)
@@ -706,6 +713,8 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
                 problems.append((f"{path}.face", f"face {condition.face!r} already has a wall "
                                                  f"(boundary_conditions[{walls[condition.face]}])"))
             walls.setdefault(condition.face, i)
+    if grid_ok:
+        problems += slab_problems(scene)
     return problems
 
 

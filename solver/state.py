@@ -56,12 +56,16 @@ class Particles:
 
     def take(self, order: np.ndarray) -> None:
         """Keep the particles `order` (indices), in that order, in every array."""
-        for name, a in self.arrays().items():
-            kept = np.ascontiguousarray(a[order])
+        self.replace({name: a[order] for name, a in self.arrays().items()})
+
+    def replace(self, arrays: dict[str, np.ndarray]) -> None:
+        """Set the per-particle arrays named as arrays() names them (all the same length)."""
+        for name, a in arrays.items():
+            a = np.ascontiguousarray(a)
             if name.startswith("extra/"):
-                self.extra[name[len("extra/"):]] = kept
+                self.extra[name[len("extra/"):]] = a
             else:
-                setattr(self, name, kept)
+                setattr(self, name, a)
 
 
 @dataclass
@@ -142,8 +146,7 @@ def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
     """
     dim = scene.dimension
     seeds = seed(scene)
-    material_of_body = np.array([list(scene.materials).index(b.material) for b in scene.bodies], dtype=np.int64)
-    order = np.argsort(material_of_body[seeds.body], kind="stable")
+    order = np.argsort(material_of_body(scene)[seeds.body], kind="stable")
     x = np.ascontiguousarray(seeds.position[order])
     body = np.ascontiguousarray(seeds.body[order]).astype(np.int32)
     volume0 = np.ascontiguousarray(seeds.volume[order])
@@ -173,13 +176,23 @@ def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
         id=np.arange(n, dtype=np.int64), body=body,
     )
 
+    return particles, material_slices(scene, body)
+
+
+def material_of_body(scene) -> np.ndarray:
+    """Index into scene.materials of each body's material (particles are sorted by it)."""
+    return np.array([list(scene.materials).index(b.material) for b in scene.bodies], dtype=np.int64)
+
+
+def material_slices(scene, body: np.ndarray) -> dict[str, slice]:
+    """The slice of particles made of each material present, for particles sorted by material."""
     slices: dict[str, slice] = {}
-    sorted_material = material_of_body[body]
+    sorted_material = material_of_body(scene)[body]
     for m_index, name in enumerate(scene.materials):
         where = np.flatnonzero(sorted_material == m_index)
         if where.size:
             slices[name] = slice(int(where[0]), int(where[-1]) + 1)
-    return particles, slices
+    return slices
 
 
 def make_materials(scene, slices: dict[str, slice], particles: Particles) -> list[tuple[object, slice]]:

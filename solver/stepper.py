@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from solver import kernels, shape
-from solver.boundary import Constraints
+from solver import kernels, parallel, shape
 from solver.loads import BodyLoads
-from solver.state import make_grid, make_materials, make_particles, make_stencil
+from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
+from solver.state import make_materials, make_particles, make_stencil, material_slices
 from solver.transfer import AffineTransfer
 
 # Nodes whose mass is below this fraction of the lightest particle's mass get no
@@ -26,9 +26,12 @@ class Instability(RuntimeError):
     """The run cannot go on: names the step, the particle (by id) and the quantity."""
 
     def __init__(self, step: int, time: float, particle_id: int | None, quantity: str, detail: str):
-        self.step, self.time, self.particle_id, self.quantity = step, time, particle_id, quantity
+        self.step, self.time, self.particle_id, self.quantity, self.detail = step, time, particle_id, quantity, detail
         who = f"particle {particle_id}" if particle_id is not None else "the system"
         super().__init__(f"unstable at step {step} (t = {time:.6g}): {quantity} of {who}: {detail}")
+
+    def __reduce__(self):   # sent between processes: any rank's failure stops them all
+        return Instability, (self.step, self.time, self.particle_id, self.quantity, self.detail)
 
 
 @dataclass
@@ -50,20 +53,23 @@ class ExplicitMPM:
         self.scene = scene
         method = scene.method
         self.particles, slices = make_particles(scene)
+        # Every process seeded every particle: the models are made (and their particles'
+        # state started) once, here, and reused whatever particles a process holds later.
         self.materials = make_materials(scene, slices, self.particles)
-        self.grid = make_grid(scene)
+        self._model_of = {name: model for name, (model, _) in zip(slices, self.materials)}
         self.shape = shape.get(method.shape_function)
-        self.stencil = make_stencil(self.particles.count, scene.dimension, self.shape.SUPPORT)
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
-        # APIC: PIC velocities plus the affine matrix C_p (solver/transfer.py)
-        self.affine = AffineTransfer(self.particles, self.grid) if method.transfer == "apic" else None
-        self.constraints = Constraints(scene, self.grid)
         self.loads = BodyLoads(scene)
         if self.loads.needs_reference:
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.particles.mass.min()) if self.particles.count else 0.0
+        # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
+        self.domain = parallel.decompose(scene, self.shape.SUPPORT)
+        self.domain.distribute(self.particles)
+        self._place_grid()
+        self._place_particles()
         self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
         self.time = 0.0
         self.step_count = 0
@@ -85,56 +91,84 @@ class ExplicitMPM:
         self._account_external_work(dt)
         self.time += dt
         self.step_count += 1
+        self.domain.stop_if_failed()                                    # any process unstable: all stop
+        moved = self.domain.migrate(self.particles, self.step_count)    # particles follow their slab
+        if moved >= SLABS_MOVED:
+            self._place_grid()
+        if moved >= PARTICLES_MOVED:
+            self._place_particles()
+
+    def _place_grid(self) -> None:
+        self.grid = self.domain.grid(self.scene)
+        self.constraints = self.domain.constraints(self.scene, self.grid)
+        # APIC: PIC velocities plus the affine matrix C_p (solver/transfer.py)
+        self.affine = AffineTransfer(self.particles, self.grid) if self.scene.method.transfer == "apic" else None
+
+    def _place_particles(self) -> None:
+        """Per-particle work arrays and material slices for the particles held here."""
+        self.stencil = make_stencil(self.particles.count, self.scene.dimension, self.shape.SUPPORT)
+        slices = material_slices(self.scene, self.particles.body)
+        self.materials = [(self._model_of[name], sl) for name, sl in slices.items()]
 
     def _step_musl(self, dt: float) -> None:
-        p, g, s = self.particles, self.grid, self.stencil
+        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
         self._interpolation_weights()                                   # phi_I(x_p), grad phi_I(x_p)
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
                     g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
         self._affine_p2g()
+        halo.sum_ghosts(g.mass, g.momentum, g.force)                    # (processes: ghost nodes to owners)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17: v_I^t, v~_I^{t+dt}
         self._impose(g.v_old)                                           # line 15
         self.boundary_work += self._impose(g.v_new)
+        halo.share_nodes(g.v_old, g.v_new)                              # (owners' values to ghost nodes)
         g.momentum.fill(0.0)
         self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, True, g.momentum)                 # lines 18-20: x_p, v_p, (mv)_I again
+        halo.sum_ghosts(g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)   # line 24: v_I^{t+dt}
         self._impose(g.v_new)                                           # line 21
+        halo.share_nodes(g.v_new)
         self._update_stress(dt, g.v_new)                                # lines 25-28: L, F, V, sigma
 
     def _step_usl(self, dt: float) -> None:
-        p, g, s = self.particles, self.grid, self.stencil
+        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
         self._interpolation_weights()
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
         self._affine_p2g()
+        halo.sum_ghosts(g.mass, g.momentum, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
+        halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)                # particles from v_I^{t+dt}
         self._update_stress(dt, g.v_new)                                # stress last, from v_I^{t+dt}
 
     def _step_usf(self, dt: float) -> None:
-        p, g, s = self.particles, self.grid, self.stencil
+        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
         self._interpolation_weights()
         g.reset()
         kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
         self._affine_p2g()
+        halo.sum_ghosts(g.mass, g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
         self._impose(g.v_old)
+        halo.share_nodes(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
+        halo.sum_ghosts(g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new)
+        halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
@@ -143,7 +177,7 @@ class ExplicitMPM:
 
     def _interpolation_weights(self) -> None:
         p, g, s = self.particles, self.grid, self.stencil
-        outside = shape.evaluate(self.shape, self.spec, p.x, p, g, s)
+        outside = self.domain.weights(self.shape, self.spec, p.x, p, g, s)   # node numbers of this process's grid
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
@@ -177,19 +211,21 @@ class ExplicitMPM:
         self.external_work += dt * float(np.sum(p.mass[:, None] * self._acceleration * p.v))
 
     def _fail(self, index: int, quantity: str, detail: str) -> None:
-        raise Instability(self.step_count + 1, self.time, int(self.particles.id[index]), quantity, detail)
+        """Raise Instability (processes: once every process has reached the same point)."""
+        self.domain.fail(Instability(self.step_count + 1, self.time, int(self.particles.id[index]), quantity, detail))
 
     # -- diagnostics ------------------------------------------------------------
 
     def stable_time_step(self, cfl: float) -> float:
         """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73)."""
-        speed = self.wave_speed + kernels.max_speed_per_axis(self.particles.v)
+        speed = self.domain.max(self.wave_speed) + self.domain.max(kernels.max_speed_per_axis(self.particles.v))
         return float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300)))
 
     def energies(self) -> Energies:
         p = self.particles
         strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
-        return Energies(kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work)
+        local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work]
+        return Energies(*(float(e) for e in self.domain.sum(local)))
 
     def check_finite(self) -> None:
         p = self.particles
@@ -198,7 +234,9 @@ class ExplicitMPM:
             for name, array in (("position", p.x), ("velocity", p.v), ("stress", p.stress)):
                 if not np.all(np.isfinite(array[bad])):
                     self._fail(bad, name, "is not finite")
+                    break
+        self.domain.stop_if_failed()
 
     def energy_scale(self) -> float:
         """sum_p m_p c^2: the energy of the bodies strained to order one, a floor for growth checks."""
-        return float(np.sum(self.particles.mass)) * self.wave_speed**2
+        return float(self.domain.sum(np.sum(self.particles.mass))) * self.domain.max(self.wave_speed)**2

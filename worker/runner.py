@@ -1,4 +1,4 @@
-"""Run the solver in a child process: `python -m solver run scene.json -o DIR --progress json`.
+"""Run the solver in a child process: `python -m solver run scene.json -o DIR --progress json -n K`.
 
 The child gets its own process group, so that a stop reaches the whole group
 (`mpiexec` and its ranks too) and a Ctrl-C at the terminal of `mpm serve` does
@@ -34,11 +34,10 @@ class Outcome:
 
 def solver_command(scene: Path, out_dir: Path, processes: int = 1,
                    progress: str = "json") -> list[str]:
-    command = [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out_dir),
-               "--progress", progress]
-    if processes > 1:
-        command = ["mpiexec", "-n", str(processes), *command]
-    return command
+    # -n: the processes granted, whatever the scene asks; for K > 1 the solver turns
+    # itself into mpiexec with K ranks (same pid, same process group)
+    return [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out_dir),
+            "--progress", progress, "-n", str(processes)]
 
 
 def die_with_parent() -> None:

@@ -11,8 +11,12 @@ index of the first particle outside the grid (or whose stencil would need a node
 beyond the grid), or -1. `spec` makes the dimension and stencil size
 compile-time constants (kernels.stencil_spec). Stencil node k has the per-axis
 offsets (k // SUPPORT**a) % SUPPORT from the particle's first node, axis 0
-fastest. The transfer kernels only ever see idx, w and dw, so they are the same
-for every shape function.
+fastest. Node numbers must be sum_a i_a * strides[a] with i_a the node's index
+along axis a of the whole grid (lower, cells), and a particle in cell i may touch
+nodes i - (S-1)//2 ... i + ceil(S/2) only (S = SUPPORT): with several processes
+the kernel is called with the strides of a process's slab of the grid
+(solver/parallel). The transfer kernels only ever see idx, w and dw, so they are
+the same for every shape function.
 
 A function that needs per-particle data (GIMP's particle sizes) also provides
 `prepare(scene, particles)`, which allocates it in `Particles.extra`, and

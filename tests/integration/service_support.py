@@ -119,7 +119,7 @@ class Stack:
                     "MPM_LEASE_SECONDS": "3",
                     "MPM_MAX_PARTICLES": "50000", "MPM_MAX_STEPS": "5000000",
                     "MPM_MAX_BODY_BYTES": "100000",
-                    "MPM_MAX_CONCURRENT_JOBS": "40", "PYTHONUNBUFFERED": "1"}
+                    "MPM_MAX_CONCURRENT_JOBS": "40", "MPM_MAX_PROCESSES": "2", "PYTHONUNBUFFERED": "1"}
         self.workers = [self._worker_process(1, warmup=True),
                         # the first worker fills the shared on-disk kernel cache
                         self._worker_process(2, warmup=False)]

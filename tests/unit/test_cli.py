@@ -167,9 +167,9 @@ def test_run_rejects_an_invalid_scene_with_exit_2(tmp_path, capsys):
 
 
 def test_run_passes_processes_to_the_scene(tmp_path, capsys):
-    # One process is all the solver supports today: validation refuses more.
-    assert cli.main(["run", scene_file(tmp_path, tiny_bar()), "-n", "2", "-o", str(tmp_path / "o")]) == 2
-    assert "parallel.processes: 2 processes is not supported" in capsys.readouterr().err
+    # -n sets parallel.processes, which validation checks (the cap of the solver)
+    assert cli.main(["run", scene_file(tmp_path, tiny_bar()), "-n", "65", "-o", str(tmp_path / "o")]) == 2
+    assert "parallel.processes: 65 processes is not supported yet (at most 64)" in capsys.readouterr().err
 
 
 # -- sub-commands of other packages --------------------------------------------------

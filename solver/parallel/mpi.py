@@ -1,0 +1,289 @@
+"""K processes over MPI: the grid cut into slabs, one per process (Karamelo 3.5).
+
+Each process holds the particles of its slab and a local grid covering the node
+layers they touch (its halo: owned nodes plus ghost nodes owned by neighbours).
+In a step:
+
+    sum_ghosts   after each particle-to-grid transfer, every process sends what
+                 it added to ghost nodes to their owners, which add it up (in
+                 rank order, so the sum is deterministic);
+    share_nodes  after the grid update, owners send the nodal values back to
+                 the processes holding them as ghosts;
+    migrate      after G2P, particles that crossed into another slab move to
+                 its process with every per-particle array (Particles.arrays());
+                 every `rebalance_every` steps the cuts move so that each slab
+                 holds about the same number of particles (MPM3DMP 4.3).
+
+Reductions (energies, the time step, checks), failures and the stop decision
+are collective, so every process takes the same branch at the same step.
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+from mpi4py import MPI
+
+from solver import shape
+from solver.boundary import Constraints
+from solver.parallel.binning import bin_particles, owners
+from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED, UNCHANGED
+from solver.parallel.slabs import balanced_cuts, even_cuts, layers_of, local_nodes, overlap, owned_nodes, split_axis
+from solver.results import ResultWriter
+from solver.state import Grid, material_of_body
+
+HALO_TAG = 17
+
+
+class SlabDomain:
+    def __init__(self, comm: MPI.Comm, scene, support: int):
+        self.comm = comm
+        self.rank, self.processes = comm.rank, comm.size
+        self.is_root = self.rank == 0
+        self.support = support
+        self.dimension = scene.dimension
+        self.cells = np.asarray(scene.grid_shape(), dtype=np.int64)
+        self.lower = np.asarray(scene.grid.lower, dtype=np.float64)
+        self.h = np.asarray(scene.cell_sizes(), dtype=np.float64)
+        self.axis = split_axis(self.cells)
+        self._inv_h = 1.0 / self.h   # as Grid computes it
+        self.rebalance_every = scene.parallel.rebalance_every
+        self.cuts = even_cuts(int(self.cells[self.axis]), self.processes)
+        self._material = material_of_body(scene)
+        self._failure: Exception | None = None
+        self.halo_bytes = 0   # sent by sum_ghosts and share_nodes so far (benchmarks/scaling.py)
+        self._plan()
+
+    # -- slabs --------------------------------------------------------------------
+
+    def _plan(self) -> None:
+        """Local grid box and exchange lists of the current cuts."""
+        k, me, s = self.processes, self.rank, self.support
+        self.local = local_nodes(self.cuts, me, s)
+        mine = owned_nodes(self.cuts, me)
+        shift = self.local[0]
+        # (peer, lo, hi) in local layers: my ghost layers that `peer` owns ...
+        self._ghosts = [(q, lo - shift, hi - shift) for q in range(k) if q != me
+                        for lo, hi in [overlap(self.local, owned_nodes(self.cuts, q)) or (0, 0)] if hi > lo]
+        # ... and my owned layers that `peer` holds as ghosts.
+        self._lent = [(r, lo - shift, hi - shift) for r in range(k) if r != me
+                      for lo, hi in [overlap(mine, local_nodes(self.cuts, r, s)) or (0, 0)] if hi > lo]
+        counts = self.cells + 1
+        counts[self.axis] = self.local[1] - self.local[0]
+        self._node_shape = tuple(int(c) for c in counts[::-1])   # nodes are numbered x fastest
+        self._axis_position = self.dimension - 1 - self.axis
+        self._node_offset = shift * int(np.prod(counts[:self.axis]))   # local stride of the split axis
+
+    def grid(self, scene) -> Grid:
+        dim = self.dimension
+        lower = self.lower.copy()
+        lower[self.axis] += self.local[0] * self.h[self.axis]
+        cells = self.cells.copy()
+        cells[self.axis] = self.local[1] - self.local[0] - 1
+        n = int(np.prod(cells + 1))
+        return Grid(lower=lower, h=self.h.copy(), cells=cells, mass=np.zeros(n), momentum=np.zeros((n, dim)),
+                    force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)))
+
+    def constraints(self, scene, grid: Grid) -> "_OwnedConstraints":
+        empty = np.zeros((0, self.dimension))
+        whole = Grid(lower=self.lower, h=self.h, cells=self.cells, mass=np.zeros(0), momentum=empty,
+                     force=empty, v_old=empty, v_new=empty)
+        return _OwnedConstraints(Constraints(scene, whole), whole, owned_nodes(self.cuts, self.rank),
+                                 self.local[0], self.axis, grid.strides)
+
+    def weights(self, module, spec, x, particles, grid: Grid, stencil) -> int:
+        """Shape functions at the particles, numbered on the local grid.
+
+        They are evaluated in the coordinates of the whole grid, bit for bit as one
+        process does (a position relative to a shifted origin differs by round-off,
+        and linear MPM turns round-off at a cell face into an O(1) difference of
+        the velocity gradient). With the local strides the node numbers come out
+        shifted by a constant along the split axis, which is taken off.
+        """
+        whole = SimpleNamespace(lower=self.lower, inv_h=self._inv_h, cells=self.cells, strides=grid.strides)
+        outside = shape.evaluate(module, spec, x, particles, whole, stencil)
+        stencil.idx -= self._node_offset
+        return outside
+
+    # -- particles ----------------------------------------------------------------
+
+    def distribute(self, particles) -> None:
+        """Every process seeded every particle: keep those of this slab (cuts balanced first)."""
+        if self.rebalance_every > 0:
+            self.cuts = balanced_cuts(self._layer_counts(particles, local=False), self.processes)
+            self._plan()
+        dest = np.empty(particles.count, dtype=np.int64)
+        self._owners(particles, dest)
+        particles.take(np.flatnonzero(dest == self.rank))
+
+    def migrate(self, particles, step: int) -> int:
+        """Send the particles that left this slab to their owners; rebalance the slabs when due."""
+        moved = UNCHANGED
+        if self.rebalance_every > 0 and step % self.rebalance_every == 0:
+            cuts = balanced_cuts(self._layer_counts(particles, local=True), self.processes)
+            if not np.array_equal(cuts, self.cuts):
+                self.cuts = cuts
+                self._plan()
+                moved = SLABS_MOVED
+        dest = np.empty(particles.count, dtype=np.int64)
+        leaving = self._owners(particles, dest)
+        if self.comm.allreduce(leaving) == 0:
+            return moved
+        _, counts, order, start = bin_particles(dest, self.processes, 1)
+        arrays = particles.arrays()
+        outgoing = [{name: a[order[start[r]:start[r + 1]]] for name, a in arrays.items()}
+                    if r != self.rank and counts[r] else None for r in range(self.processes)]
+        incoming = [part for part in self.comm.alltoall(outgoing) if part]
+        stay = order[start[self.rank]:start[self.rank + 1]]
+        merged = {name: np.concatenate([a[stay]] + [_column(part, name, a) for part in incoming])
+                  for name, a in arrays.items()}
+        for part in incoming:   # state a model allocated on the sending side only
+            for name in part.keys() - merged.keys():
+                merged[name] = np.concatenate([np.zeros((stay.size, *part[name].shape[1:]))]
+                                              + [_column(p, name, part[name]) for p in incoming])
+        # particles sorted by material (the models' slices), then by id, as one process has them
+        order = np.lexsort((merged["id"], self._material[merged["body"]]))
+        particles.replace({name: a[order] for name, a in merged.items()})
+        return max(moved, PARTICLES_MOVED)
+
+    def _owners(self, particles, dest: np.ndarray) -> int:
+        a = self.axis
+        return owners(particles.x[:, a], float(self.lower[a]), float(1.0 / self.h[a]), self.cuts, self.rank, dest)
+
+    def _layer_counts(self, particles, local: bool) -> np.ndarray:
+        """Particles per cell layer along the split axis (summed over processes when `local`)."""
+        a = self.axis
+        finite = particles.x[np.isfinite(particles.x[:, a]), a]
+        counts = np.bincount(layers_of(finite, self.lower[a], self.h[a], int(self.cells[a])),
+                             minlength=int(self.cells[a])).astype(np.int64)
+        if local:
+            self.comm.Allreduce(MPI.IN_PLACE, counts, op=MPI.SUM)
+        return counts
+
+    # -- grid exchange ------------------------------------------------------------
+
+    def _layers(self, array: np.ndarray, lo: int, hi: int) -> np.ndarray:
+        shaped = array.reshape(self._node_shape + array.shape[1:])
+        return shaped[(slice(None),) * self._axis_position + (slice(lo, hi),)]
+
+    def sum_ghosts(self, *node_arrays: np.ndarray) -> None:
+        """Add what this process put on ghost nodes into their owners' values."""
+        self._exchange(self._ghosts, self._lent, node_arrays, np.add)
+
+    def share_nodes(self, *node_arrays: np.ndarray) -> None:
+        """Copy the owners' nodal values onto the ghost nodes of the other processes."""
+        self._exchange(self._lent, self._ghosts, node_arrays, lambda held, got, out: np.copyto(out, got))
+
+    def _exchange(self, send, receive, node_arrays, combine) -> None:
+        """Send the layers of `send` to their peers; combine what comes for `receive` into
+        the local values, peer by peer in rank order (so sums are the same every run)."""
+        sent = [np.concatenate([self._layers(a, lo, hi).ravel() for a in node_arrays]) for _, lo, hi in send]
+        requests = [self.comm.Isend(buf, dest=peer, tag=HALO_TAG) for (peer, _, _), buf in zip(send, sent)]
+        self.halo_bytes += sum(buf.nbytes for buf in sent)
+        for peer, lo, hi in receive:
+            views = [self._layers(a, lo, hi) for a in node_arrays]
+            buf = np.empty(sum(v.size for v in views))
+            self.comm.Recv(buf, source=peer, tag=HALO_TAG)
+            at = 0
+            for v in views:
+                combine(v, buf[at:at + v.size].reshape(v.shape), out=v)
+                at += v.size
+        MPI.Request.Waitall(requests)
+
+    # -- collective decisions -----------------------------------------------------
+
+    def fail(self, error: Exception) -> None:
+        """Remember the first failure; the step goes on so that no process waits forever."""
+        if self._failure is None:
+            self._failure = error
+
+    def stop_if_failed(self) -> None:
+        """Raise, on every process, the failure of the lowest rank that had one."""
+        if self.comm.allreduce(self._failure is not None, op=MPI.LOR):
+            failures = self.comm.allgather(self._failure)
+            raise next(f for f in failures if f is not None)
+
+    def sum(self, value):
+        return self._reduce(value, MPI.SUM)
+
+    def max(self, value):
+        return self._reduce(value, MPI.MAX)
+
+    def _reduce(self, value, op):
+        a = np.array(value, dtype=np.float64)
+        self.comm.Allreduce(MPI.IN_PLACE, a, op=op)
+        return a if a.ndim else float(a)
+
+    def any(self, flag: bool) -> bool:
+        return bool(self.comm.allreduce(bool(flag), op=MPI.LOR))
+
+    def root_says(self, flag: bool) -> bool:
+        """Rank 0's answer on every process (for decisions taken on its clock)."""
+        return bool(self.comm.bcast(bool(flag), root=0))
+
+    # -- output -------------------------------------------------------------------
+
+    def gather(self, fields: dict[str, np.ndarray]) -> dict[str, np.ndarray] | None:
+        """The fields of all particles, sorted by id, on rank 0 (None elsewhere)."""
+        parts = self.comm.gather(fields, root=0)
+        if not self.is_root:
+            return None
+        merged = {name: np.concatenate([p[name] for p in parts]) for name in fields}
+        order = np.argsort(merged["id"], kind="stable")
+        return {name: np.ascontiguousarray(a[order]) for name, a in merged.items()}
+
+    def writer(self, out_dir, scene, version: str):
+        return ResultWriter(out_dir, scene, version) if self.is_root else _NoWriter()
+
+
+def _column(part: dict, name: str, like: np.ndarray) -> np.ndarray:
+    """`name` of a received block, zeros when the sender never allocated it."""
+    if name in part:
+        return part[name]
+    count = next(iter(part.values())).shape[0]
+    return np.zeros((count, *like.shape[1:]), dtype=like.dtype)
+
+
+class _OwnedConstraints:
+    """The scene's constraints on the nodes this process owns, in local node numbers.
+
+    Only owners impose them (and count their work); ghost copies get the imposed
+    values through share_nodes.
+    """
+
+    def __init__(self, whole: Constraints, grid: Grid, owned: tuple[int, int], shift: int, axis: int,
+                 local_strides: np.ndarray):
+        counts = grid.node_counts
+        coords = (whole.node[:, None] // grid.strides[None, :]) % counts[None, :]
+        keep = (coords[:, axis] >= owned[0]) & (coords[:, axis] < owned[1])
+        coords = coords[keep]
+        coords[:, axis] -= shift
+        self._whole, self._keep = whole, keep
+        self.node = np.ascontiguousarray(coords @ local_strides, dtype=np.int64)
+        self.axis = np.ascontiguousarray(whole.axis[keep])
+        self.value = np.ascontiguousarray(whole.value[keep])
+        self.time_dependent = whole.time_dependent
+
+    def set_time(self, t: float) -> None:
+        if self.time_dependent:
+            self._whole.set_time(t)
+            self.value[:] = self._whole.value[self._keep]
+
+
+class _NoWriter:
+    """Processes other than rank 0 write nothing."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def write_frame(self, step, time, fields) -> None:
+        pass
+
+    def append_series(self, **values) -> None:
+        pass
+
+    def close(self, status: str = "complete") -> None:
+        pass

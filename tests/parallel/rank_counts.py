@@ -1,0 +1,17 @@
+"""Run under mpiexec: advance a scene N steps; rank 0 prints the particles each process
+holds and the slab cuts at the start and at the end, as JSON."""
+import json
+import sys
+from pathlib import Path
+
+from solver.scene import load_scene
+from solver.stepper import ExplicitMPM
+
+scene = load_scene(Path(sys.argv[1]))
+sim = ExplicitMPM(scene)
+start = sim.domain.cuts.tolist()
+for _ in range(int(sys.argv[2])):
+    sim.advance(scene.time.dt)
+counts = sim.domain.comm.gather(sim.particles.count, root=0)
+if sim.domain.is_root:
+    print(json.dumps({"counts": counts, "cuts_start": start, "cuts_end": sim.domain.cuts.tolist()}))

@@ -1,0 +1,56 @@
+"""K = 1, 2, 3 processes give the same particles after 200 steps (issue 9).
+
+Each scene has bodies crossing slab boundaries and slabs that move (rebalancing
+every 20 steps). The only difference between K runs is the order in which ghost
+contributions are summed into their owner nodes: round-off, about 1e-16 relative
+per step, which a stable elastic run does not amplify much over 200 steps. The
+issue asks for agreement to 1e-12 relative (max |a - b| / max |a| per field),
+particles matched by id (rank 0 writes them sorted by id).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ranks import SCENE_2D, SCENE_3D, last_frame, relative_difference, run_cli, run_mpiexec, scene
+
+TOLERANCE = 1e-12
+CASES = {
+    "2d-musl": scene(SCENE_2D),
+    "2d-usl": scene(SCENE_2D, method__scheme="usl", method__transfer="pic"),
+    "2d-usf": scene(SCENE_2D, method__scheme="usf"),
+    "3d-musl": scene(SCENE_3D),
+}
+RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3)]
+
+
+@pytest.fixture(scope="module")
+def single(tmp_path_factory):
+    """The one-process run of each case, computed once."""
+    done = {}
+
+    def get(name):
+        if name not in done:
+            out = tmp_path_factory.mktemp(f"{name}-k1")
+            finished = run_cli(CASES[name], out, 1)
+            assert finished.returncode == 0, finished.stderr
+            done[name] = last_frame(out)
+        return done[name]
+
+    return get
+
+
+@pytest.mark.parametrize("name,processes", RUNS, ids=[f"{n}-k{k}" for n, k in RUNS])
+def test_k_processes_give_the_single_process_particles(name, processes, single, tmp_path):
+    reference = single(name)
+    # K = 2 the way users start it (mpm run -n 2), K = 3 with mpiexec started here
+    launcher = run_cli if processes == 2 else run_mpiexec
+    finished = launcher(CASES[name], tmp_path, processes)
+    assert finished.returncode == 0, finished.stderr
+    frame = last_frame(tmp_path)
+    assert frame["step"] == reference["step"] == 200
+    got, want = frame["fields"], reference["fields"]
+    assert np.array_equal(got["id"], want["id"]) and np.array_equal(got["body"], want["body"])
+    assert np.max(np.abs(want["stress"])) > 0   # the bodies did collide
+    for field in ("position", "velocity", "stress"):
+        assert relative_difference(want[field], got[field]) <= TOLERANCE, field
