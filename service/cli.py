@@ -13,6 +13,7 @@ import sys
 import uvicorn
 
 from service.app import create_app
+from service.auth import TokenError, access_notice, load_tokens
 from service.embedded_redis import EmbeddedRedis
 from worker.runner import die_with_parent
 from worker.logs import configure_logging
@@ -63,6 +64,11 @@ def serve_command(args: argparse.Namespace) -> int:
     updates = {k: v for k, v in (("host", args.host), ("port", args.port)) if v is not None}
     settings = settings.model_copy(update=updates)
     configure_logging(settings.log_level)
+    try:
+        tokens = load_tokens(settings.api_tokens)
+    except TokenError as exc:
+        print(f"mpm serve: {exc}", file=sys.stderr)
+        return 1
     embedded: EmbeddedRedis | None = None
     worker: subprocess.Popen | None = None
     try:
@@ -81,8 +87,8 @@ def serve_command(args: argparse.Namespace) -> int:
                                       start_new_session=True, preexec_fn=die_with_parent)
         elif embedded:
             log.warning("no worker: jobs stay queued (the embedded Redis is private to this process)")
-        print(f"MPM service on http://{settings.host}:{settings.port}  (API docs: /docs; Ctrl-C stops)",
-              file=sys.stderr, flush=True)
+        print(f"MPM service on http://{settings.host}:{settings.port}  (API docs: /docs; Ctrl-C stops)\n"
+              f"{access_notice(tokens, settings.host)}", file=sys.stderr, flush=True)
         config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port,
                                 log_config=None, access_log=args.access_log)
         uvicorn.Server(config).run()

@@ -103,7 +103,8 @@ def _number_or_expression(variables: tuple[str, ...]):
             try:
                 compile_expression(value, variables)
             except ExpressionError as exc:
-                raise _error(f"invalid expression {value!r}: {exc}") from None
+                shown = value if len(value) <= 80 else value[:60] + "..."  # not a huge input echoed
+                raise _error(f"invalid expression {shown!r}: {exc}") from None
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise _error(f"must be a number or an expression string in {', '.join(variables)}")
@@ -420,7 +421,7 @@ class Body(_Model):
     name: Annotated[str, Field(min_length=1)]
     material: str
     geometry: GeometrySpec
-    particles_per_cell: Annotated[int, Strict(), Field(ge=1)] = 2  # per axis
+    particles_per_cell: Annotated[int, Strict(), Field(ge=1, le=100)] = 2  # per axis; bounded before any allocation
     initial_velocity: list[SpaceValue] | None = None  # None: at rest
     initial_temperature: NonNegative | None = None
     initial_density: Positive | None = None  # ideal_gas bodies only
