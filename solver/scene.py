@@ -515,11 +515,24 @@ class Preview(_Model):
         return value
 
 
+class Checkpoint(_Model):
+    """Restart checkpoints (solver/checkpoint.py): every N steps and/or M seconds of wall time."""
+    every_steps: Annotated[int, Strict(), Field(ge=1)] | None = None
+    every_seconds: Positive | None = None
+
+    @model_validator(mode="after")
+    def _one_given(self) -> "Checkpoint":
+        if self.every_steps is None and self.every_seconds is None:
+            raise _error("give every_steps, every_seconds or both")
+        return self
+
+
 class Output(_Model):
     frames: Annotated[int, Strict(), Field(ge=2)] = 51  # first and last included
     fields: list[str] = Field(default_factory=lambda: ["position", "velocity", "stress"])
     energies: Energies = True  # or N: every N steps
     preview: Preview = Field(default_factory=Preview)
+    checkpoint: Checkpoint | None = None  # unset: the runner's interval (every minute by default)
 
     @field_validator("fields")
     @classmethod
