@@ -66,6 +66,16 @@ class Settings(BaseSettings):
     cors_origins: str = Field("", description="comma-separated origins a browser may call the API "
                                               "from; empty: CORS off")
 
+    # Nothing lost: checkpoints, attempts, disk (docs/reliability.md).
+    checkpoint_seconds: float = Field(60.0, gt=0, description="wall-clock seconds between a job's "
+                                                               "restart checkpoints")
+    max_attempts: int = Field(3, ge=1, description="starts of a job whose run was lost (worker or "
+                                                    "solver killed) before it is failed")
+    max_job_bytes: int = Field(20 * 2**30, gt=0, description="size limit of one job's folder")
+    max_total_bytes: int = Field(500 * 2**30, gt=0, description="size limit of all jobs' folders")
+    retention_days: float = Field(30.0, ge=0, description="finished jobs older than this are deleted "
+                                                           "with their files (0: kept for ever)")
+
     log_level: str = "INFO"
 
     @property

@@ -142,7 +142,8 @@ return 0
 
 
 # KEYS: running index, queued index. ARGV: key prefix.
-# A running job whose lease is gone lost its worker: back to queued. Returns their ids.
+# A running job whose lease is gone lost its worker: back to queued, counted in `lost`
+# (worker/tasks.py fails a job lost too often). Returns their ids.
 _REQUEUE_ORPHANS = """
 local out = {}
 for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
@@ -152,6 +153,7 @@ for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
     redis.call('ZADD', KEYS[2], score, id)
     redis.call('HSET', ARGV[1] .. 'job:' .. id, 'status', '"queued"', 'started_at', 'null',
                'progress', '0.0', 'step', '0')
+    redis.call('HINCRBY', ARGV[1] .. 'job:' .. id, 'lost', 1)
     table.insert(out, id)
   end
 end
