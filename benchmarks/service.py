@@ -71,21 +71,20 @@ def percentile(values: list[float], q: float) -> float:
 
 
 class Stack:
-    def __init__(self, data_dir: Path):
+    """Redis, two workers (`processes[0:2]`) and the API (`processes[2]`); `env` adds settings."""
+
+    def __init__(self, data_dir: Path, env: dict[str, str] | None = None):
         self.redis = EmbeddedRedis(data_dir).start()
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
             port = s.getsockname()[1]
         self.url = f"http://127.0.0.1:{port}"
-        env = {**os.environ, "MPM_REDIS_URL": self.redis.url, "MPM_DATA_DIR": str(data_dir),
-               "MPM_LOG_LEVEL": "WARNING", "MPM_MAX_CONCURRENT_JOBS": "1000"}
-        logs = open(data_dir / "stack.log", "ab")
-        # `python -m solver` is the `mpm` command
-        start = lambda *args: subprocess.Popen([sys.executable, "-m", "solver", *args], env=env,  # noqa: E731
-                                               cwd=ROOT, stdout=logs, stderr=logs, start_new_session=True)
-        self.processes = [start("worker", "--name", "bench1@local"),
-                          start("worker", "--name", "bench2@local"),
-                          start("serve", "--no-worker", "--port", str(port))]
+        self.env = {**os.environ, "MPM_REDIS_URL": self.redis.url, "MPM_DATA_DIR": str(data_dir),
+                    "MPM_LOG_LEVEL": "WARNING", "MPM_MAX_CONCURRENT_JOBS": "1000", **(env or {})}
+        self.logs = open(data_dir / "stack.log", "ab")
+        self.processes = [self.start("worker", "--name", "bench1@local"),
+                          self.start("worker", "--name", "bench2@local"),
+                          self.start("serve", "--no-worker", "--port", str(port))]
         deadline = time.monotonic() + 600
         while time.monotonic() < deadline:
             try:
@@ -97,6 +96,11 @@ class Stack:
             time.sleep(0.5)
         self.stop()
         raise RuntimeError(f"the stack did not start; see {data_dir / 'stack.log'}")
+
+    def start(self, *args: str) -> subprocess.Popen:
+        """`mpm ARGS` (`python -m solver` is the `mpm` command) with the stack's settings."""
+        return subprocess.Popen([sys.executable, "-m", "solver", *args], env=self.env, cwd=ROOT,
+                                stdout=self.logs, stderr=self.logs, start_new_session=True)
 
     def stop(self) -> None:
         for process in self.processes:

@@ -6,11 +6,14 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 
 from fastapi import FastAPI
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
 from service import errors, health, jobs, scenes
+from service.auth import TokenAuth, load_tokens
 from service.body_limit import BodySizeLimit
+from service.json_depth import JsonDepthLimit
 from service.state import Services
 from worker.settings import Settings, get_settings
 
@@ -23,7 +26,9 @@ The API is at <a href="/docs">/docs</a>.</p></body></html>"""
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
+    """The app; raises service.auth.TokenError when MPM_API_TOKENS cannot be read."""
     settings = settings or get_settings()
+    tokens = load_tokens(settings.api_tokens)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
@@ -37,7 +42,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                   description="Material point method simulations: submit a scene, follow the job, "
                               "download the HDF5 result and previews.")
     errors.install(app)
+    app.state.tokens = tokens
+    # Outermost last: CORS (preflights need no token), the token, the body size, the JSON depth.
+    app.add_middleware(JsonDepthLimit, max_depth=settings.max_json_depth)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(TokenAuth, tokens=tokens)
+    origins = [origin.strip() for origin in settings.cors_origins.split(",") if origin.strip()]
+    if origins:
+        app.add_middleware(CORSMiddleware, allow_origins=origins, allow_methods=["GET", "POST", "DELETE"],
+                           allow_headers=["Authorization", "Content-Type"], max_age=600)
     app.include_router(jobs.router)
     app.include_router(scenes.router)
     app.include_router(health.router)

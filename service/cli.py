@@ -1,20 +1,21 @@
 """`mpm serve`: the API and dashboard, one worker, and an embedded Redis when
-MPM_REDIS_URL is not set. Ctrl-C (or SIGTERM) stops all of it: the API first, then
-the worker (a running job goes back to the queue), then the embedded Redis."""
+MPM_REDIS_URL is not set; the worker and the embedded Redis are started again when
+they die (service/supervisor.py). Ctrl-C (or SIGTERM) stops all of it: the API first,
+then the worker (a running job goes back to the queue), then the embedded Redis."""
 from __future__ import annotations
 
 import argparse
 import logging
 import os
 import signal
-import subprocess
 import sys
 
 import uvicorn
 
 from service.app import create_app
+from service.auth import TokenError, access_notice, load_tokens
 from service.embedded_redis import EmbeddedRedis
-from worker.runner import die_with_parent
+from service.supervisor import ChildProcess, Supervisor
 from worker.logs import configure_logging
 from worker.settings import get_settings
 
@@ -38,18 +39,6 @@ def register_serve(subparsers) -> None:
     parser.set_defaults(func=serve_command)
 
 
-def _stop_worker(process: subprocess.Popen, timeout: float) -> None:
-    if process.poll() is not None:
-        return
-    process.send_signal(signal.SIGTERM)  # warm shutdown: a running job is requeued
-    try:
-        process.wait(timeout)
-    except subprocess.TimeoutExpired:
-        log.warning("worker did not stop in time; killed", extra={"pid": process.pid})
-        process.kill()
-        process.wait()
-
-
 def _interrupt(signum, frame) -> None:
     raise KeyboardInterrupt
 
@@ -63,8 +52,14 @@ def serve_command(args: argparse.Namespace) -> int:
     updates = {k: v for k, v in (("host", args.host), ("port", args.port)) if v is not None}
     settings = settings.model_copy(update=updates)
     configure_logging(settings.log_level)
+    try:
+        tokens = load_tokens(settings.api_tokens)
+    except TokenError as exc:
+        print(f"mpm serve: {exc}", file=sys.stderr)
+        return 1
     embedded: EmbeddedRedis | None = None
-    worker: subprocess.Popen | None = None
+    worker: ChildProcess | None = None
+    supervisor = Supervisor()
     try:
         if not settings.redis_url:
             try:
@@ -76,21 +71,24 @@ def serve_command(args: argparse.Namespace) -> int:
         if not args.no_worker:
             env = {**os.environ, "MPM_REDIS_URL": settings.redis_url,
                    "MPM_DATA_DIR": str(settings.data_dir)}
-            # Its own session: a Ctrl-C reaches `mpm serve` only, which stops the worker in order.
-            worker = subprocess.Popen([sys.executable, "-m", "worker"], env=env,
-                                      start_new_session=True, preexec_fn=die_with_parent)
+            worker = ChildProcess([sys.executable, "-m", "worker"], env).start()
+            supervisor.watch("the worker", worker.alive, worker.start)
         elif embedded:
             log.warning("no worker: jobs stay queued (the embedded Redis is private to this process)")
-        print(f"MPM service on http://{settings.host}:{settings.port}  (API docs: /docs; Ctrl-C stops)",
-              file=sys.stderr, flush=True)
+        print(f"MPM service on http://{settings.host}:{settings.port}  (API docs: /docs; Ctrl-C stops)\n"
+              f"{access_notice(tokens, settings.host)}", file=sys.stderr, flush=True)
+        if embedded is not None:
+            supervisor.watch("the embedded Redis", embedded.alive, embedded.restart)
+        supervisor.start()
         config = uvicorn.Config(create_app(settings), host=settings.host, port=settings.port,
                                 log_config=None, access_log=args.access_log)
         uvicorn.Server(config).run()
     except KeyboardInterrupt:
         pass
     finally:
+        supervisor.stop()
         if worker is not None:
-            _stop_worker(worker, timeout=settings.cancel_grace_seconds + 20)
+            worker.stop(timeout=settings.cancel_grace_seconds + 20)
         if embedded is not None:
             embedded.stop()
     log.info("service stopped")

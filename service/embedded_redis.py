@@ -42,6 +42,7 @@ class EmbeddedRedis:
         self.port: int | None = None
         self.process: subprocess.Popen | None = None
         self._lock_file = None
+        self._same_port = False  # a restart keeps the port, so that clients reconnect
 
     @property
     def url(self) -> str:
@@ -70,7 +71,7 @@ class EmbeddedRedis:
         self.dir.mkdir(parents=True, exist_ok=True)
         self._lock()
         for _ in range(5):  # another process may take the free port before redis binds it
-            self.port = _free_port()
+            self.port = self.port if self._same_port else _free_port()
             config = self.dir / "redis.conf"
             config.write_text(self._config())
             config.chmod(0o600)  # it holds the password
@@ -82,6 +83,7 @@ class EmbeddedRedis:
                 log.info("embedded redis started", extra={"port": self.port, "dir": str(self.dir)})
                 return self
             self._kill()
+            time.sleep(0.2 if self._same_port else 0)
         self._lock_file.close()
         raise RuntimeError(f"the embedded Redis did not start; see {self.dir / 'redis.log'}")
 
@@ -108,17 +110,28 @@ class EmbeddedRedis:
             self.process.kill()
             self.process.wait()
 
+    def alive(self) -> bool:
+        return self.process is not None and self.process.poll() is None
+
     def stop(self, timeout: float = 10.0) -> None:
         """SIGTERM: Redis flushes its append-only file and exits."""
-        if not self.process or self.process.poll() is not None:
-            return
-        self.process.send_signal(signal.SIGTERM)
-        try:
-            self.process.wait(timeout)
-        except subprocess.TimeoutExpired:
-            self._kill()
-        self._lock_file.close()
-        log.info("embedded redis stopped", extra={"port": self.port})
+        if self.alive():
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self._kill()
+            log.info("embedded redis stopped", extra={"port": self.port})
+        if self._lock_file is not None:
+            self._lock_file.close()
+            self._lock_file = None
+
+    def restart(self) -> "EmbeddedRedis":
+        """Start again (after a stop, or a crash): the same port, password and data (the
+        append-only file), so that every client reconnects by itself and finds every record."""
+        self.stop()
+        self._same_port = True
+        return self.start()
 
     def __enter__(self) -> "EmbeddedRedis":
         return self.start()

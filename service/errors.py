@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 from typing import Any, Iterable, Sequence
 
+import redis
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
@@ -87,6 +88,13 @@ def _http_error(request: Request, exc: StarletteHTTPException) -> JSONResponse:
                           headers=getattr(exc, "headers", None))
 
 
+def _store_unavailable(request: Request, exc: redis.RedisError) -> JSONResponse:
+    """Redis is down or restarting: nothing is lost (docs/reliability.md), ask to retry."""
+    log.warning("redis unavailable: %s", exc, extra={"method": request.method, "path": request.url.path})
+    return error_response(503, "unavailable", "the job store (Redis) is not reachable; retry shortly",
+                          headers={"Retry-After": "2"})
+
+
 def _unexpected(request: Request, exc: Exception) -> JSONResponse:
     log.error("unhandled error", exc_info=exc,
               extra={"method": request.method, "path": request.url.path})
@@ -97,4 +105,5 @@ def install(app: FastAPI) -> None:
     app.add_exception_handler(ApiError, _api_error)
     app.add_exception_handler(RequestValidationError, _request_validation)
     app.add_exception_handler(StarletteHTTPException, _http_error)
+    app.add_exception_handler(redis.RedisError, _store_unavailable)
     app.add_exception_handler(Exception, _unexpected)

@@ -12,11 +12,12 @@ from solver.examples import ExampleNotFound, list_examples, load_example
 from solver.scene import Limits, Scene, SceneError, load_scene
 from solver.summary import summarize
 
+from service.auth import caller
 from service.errors import ApiError, documented, validation_error
 from service.state import Services, services
 from worker.settings import Settings
 
-router = APIRouter(tags=["scenes"])
+router = APIRouter(tags=["scenes"], dependencies=[Depends(caller)])
 
 
 # The setting behind each limit problem of solver.scene (by its path).

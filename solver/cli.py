@@ -64,18 +64,19 @@ def _print_scene_errors(source: str, error) -> None:
         print(f"{item['path'] or '(scene)'}: {item['message']}", file=sys.stderr)
 
 
-def _load(path: str, processes: int | None = None):
-    """The validated scene of a file, with ``parallel.processes`` overridden; None after printing errors."""
+def _load(path: str | dict, processes: int | None = None):
+    """The validated scene of a file (or a scene document), with ``parallel.processes``
+    overridden; None after printing errors."""
     from solver.scene import SceneError, load_scene
 
     try:
-        scene = load_scene(Path(path))
+        scene = load_scene(path if isinstance(path, dict) else Path(path))
         if processes is not None:
             data = scene.model_dump(mode="json")
             data["parallel"] = {**(data.get("parallel") or {}), "processes": processes}
             scene = load_scene(data)
     except SceneError as error:
-        _print_scene_errors(path, error)
+        _print_scene_errors("the checkpoint's scene" if isinstance(path, dict) else path, error)
         return None
     return scene
 
@@ -107,28 +108,52 @@ def register_run(subparsers) -> None:
         "run", help="run a scene locally (no server)",
         description="Run a scene here and write result.h5, result.xdmf and preview.png.",
     )
-    parser.add_argument("scene", help="scene file (JSON)")
+    parser.add_argument("scene", nargs="?", help="scene file (JSON); with --resume: the checkpoint's by default")
     parser.add_argument("-o", "--output", metavar="DIR", help="output folder (default: out/<scene file name>)")
     parser.add_argument("-n", "--processes", type=_positive_int, metavar="K",
                         help="processes to run on (sets parallel.processes)")
+    parser.add_argument("--resume", metavar="DIR",
+                        help="continue the run in DIR from its checkpoint (from the start when it has none)")
+    parser.add_argument("--checkpoint-seconds", type=float, metavar="S",
+                        help="a restart checkpoint every S seconds of wall time (default 60; "
+                             "the scene's output.checkpoint wins)")
     parser.add_argument("--progress", choices=("bar", "json", "none"), default="bar",
                         help="bar: a progress line; json: one JSON object per update (for programs); none")
     parser.set_defaults(func=cmd_run)
 
 
+def _run_target(scene: str | None, output: str | None, resume: str | None) -> tuple[str | dict, Path]:
+    """`mpm run [SCENE] [-o DIR] [--resume DIR]`: the scene to load and the output folder."""
+    if resume is None:
+        if scene is None:
+            raise ValueError("give a scene file (or --resume DIR)")
+        return scene, Path(output) if output else Path("out") / Path(scene).stem
+    if output and Path(output).resolve() != Path(resume).resolve():
+        raise ValueError("--resume DIR continues the run in DIR: -o, when given, must name the same folder")
+    if scene is None:
+        from solver.checkpoint import scene_of
+        return json.loads(scene_of(resume)), Path(resume)
+    return scene, Path(resume)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
-    scene = _load(args.scene, args.processes)
+    try:
+        scene_source, out_dir = _run_target(args.scene, args.output, args.resume)
+    except ValueError as error:
+        print(f"mpm run: error: {error}", file=sys.stderr)
+        return EXIT_ERROR
+    scene = _load(scene_source, args.processes)
     if scene is None:
         return EXIT_INVALID
     from solver import parallel
 
     if scene.parallel.processes > 1 and parallel.launch.world() is None:
         _exec_processes(scene.parallel.processes, args)   # becomes mpiexec: does not return
-    out_dir = Path(args.output) if args.output else Path("out") / Path(args.scene).stem
     from solver import run  # numba and the kernels load only for a run
 
     if not parallel.is_root():   # with several processes rank 0 reports, the others compute
-        return EXIT_OK if run(scene, out_dir).status == "complete" else EXIT_PARTIAL
+        result = run(scene, out_dir, resume=args.resume is not None, checkpoint_seconds=args.checkpoint_seconds)
+        return EXIT_OK if result.status == "complete" else EXIT_PARTIAL
 
     progress: Callable[[Any], None] | None = None
     bar = ProgressBar() if args.progress == "bar" else None
@@ -136,9 +161,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         progress = bar.update
     elif args.progress == "json":
         def progress(info: Any) -> None:
-            print(json.dumps({"event": "progress", **_plain(info)}), flush=True)
+            try:
+                print(json.dumps({"event": "progress", **_plain(info)}), flush=True)
+            except BrokenPipeError:  # the reader died (a killed worker): run on to its stop signal
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
-    result = run(scene, out_dir, progress=progress)
+    try:
+        result = run(scene, out_dir, progress=progress, resume=args.resume is not None,
+                     checkpoint_seconds=args.checkpoint_seconds)
+    except ValueError as error:  # a checkpoint of another scene
+        print(f"mpm run: error: {error}", file=sys.stderr)
+        return EXIT_ERROR
     if bar is not None:
         bar.close()
     done = _plain(result)
@@ -160,9 +193,11 @@ def _exec_processes(processes: int, args: argparse.Namespace) -> None:
     (same pid: a signal to this process reaches mpiexec, which forwards it to the ranks)."""
     from solver.parallel import launch
 
-    out = ["-o", args.output] if args.output else []
-    command = launch.command(processes, ["run", args.scene, *out, "-n", str(processes),
-                                         "--progress", args.progress])
+    given = [args.scene] if args.scene else []
+    given += ["-o", args.output] if args.output else []
+    given += ["--resume", args.resume] if args.resume else []
+    given += ["--checkpoint-seconds", repr(args.checkpoint_seconds)] if args.checkpoint_seconds else []
+    command = launch.command(processes, ["run", *given, "-n", str(processes), "--progress", args.progress])
     sys.stdout.flush()
     sys.stderr.flush()
     os.execve(command[0], command, launch.environment())

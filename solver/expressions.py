@@ -163,7 +163,7 @@ class _Parser:
                     f"chained comparison after {operator.text!r} at column {operator.column}; "
                     "nest where() instead"
                 )
-            self.program.append(("call", _COMPARISONS[operator.text], 2))
+            self._emit(_COMPARISONS[operator.text], 2, operator)
             return "condition"
         return kind
 
@@ -175,7 +175,7 @@ class _Parser:
             right_start = self.token
             self._number(kind, start)
             self._number(self._product(), right_start)
-            self.program.append(("call", _BINARY[operator.text], 2))
+            self._emit(_BINARY[operator.text], 2, operator)
         return kind
 
     def _product(self) -> str:
@@ -186,7 +186,7 @@ class _Parser:
             right_start = self.token
             self._number(kind, start)
             self._number(self._unary(), right_start)
-            self.program.append(("call", _BINARY[operator.text], 2))
+            self._emit(_BINARY[operator.text], 2, operator)
         return kind
 
     def _unary(self) -> str:
@@ -202,7 +202,7 @@ class _Parser:
             start = self.token
             self._number(self._unary(), start)
             if operator.text == "-":
-                self.program.append(("call", np.negative, 1))
+                self._emit(np.negative, 1, operator)
             kind = "number"
         else:
             kind = self._power()
@@ -213,11 +213,11 @@ class _Parser:
         start = self.token
         kind = self._atom()
         if self.token.text == "**":
-            self._advance()
+            operator = self._advance()
             right_start = self.token
             self._number(kind, start)
             self._number(self._unary(), right_start)
-            self.program.append(("call", np.power, 2))
+            self._emit(np.power, 2, operator)
         return kind
 
     def _atom(self) -> str:
@@ -285,8 +285,26 @@ class _Parser:
                     )
             else:
                 self._number(kind, start)
-        self.program.append(("call", function, count))
+        self._emit(function, count, name)
         return "number"
+
+    def _emit(self, function: Callable[..., np.ndarray], count: int, token: _Token) -> None:
+        """Append a call; on constant arguments compute it now instead, so that a constant
+        that overflows or divides by zero (``9**9**9``, ``1/0``) is an error here, not an
+        infinity in the simulation."""
+        arguments = self.program[len(self.program) - count:]
+        if any(kind != "const" for kind, _, _ in arguments):
+            self.program.append(("call", function, count))
+            return
+        with np.errstate(all="ignore"):
+            value = float(function(*(payload for _, payload, _ in arguments)))
+        if not math.isfinite(value):
+            raise ExpressionError(
+                f"{token.text!r} at column {token.column} gives {value} on constants "
+                "(overflow, division by zero or outside the domain)"
+            )
+        del self.program[len(self.program) - count:]
+        self.program.append(("const", value, 0))
 
     @staticmethod
     def _number(kind: str, start: _Token) -> None:
@@ -312,7 +330,7 @@ class Expression:
         """Evaluate element-wise. Every value given (used or not) takes part in the
         broadcast, so ``compile_expression("1", "xy").evaluate(x=xs, y=ys)`` has the
         shape of ``xs``; the result is a new float64 array. Non-finite results
-        (e.g. ``1/0``) are returned as they are, for the caller to check."""
+        (e.g. ``1/x`` at x = 0) are returned as they are, for the caller to check."""
         missing = self.variables_used - values.keys()
         if missing:
             raise ExpressionError(f"no value given for {', '.join(sorted(missing))} in {self.text!r}")

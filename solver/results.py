@@ -61,6 +61,7 @@ class ResultWriter:
         self.dimension = int(scene.dimension)
         self.frame_count = 0
         self._series_rows: list[dict[str, float]] = []
+        self.series_count = 0  # rows of the time series so far (written and buffered)
         self._closed = False
         # No file lock: readers (preview, service) may open the file while it grows.
         self._file = h5py.File(self.path, "w", locking=False)
@@ -144,6 +145,21 @@ class ResultWriter:
                 raise ValueError(f"invalid time-series name {key!r}")
             row[key] = float(value)
         self._series_rows.append(row)
+        self.series_count += 1
+
+    def series(self) -> dict[str, np.ndarray]:
+        """The time series so far (written and buffered), ``{name: array}``."""
+        self._flush_series()
+        return {key: dataset[()] for key, dataset in self._file["time_series"].items()}
+
+    def copy_frames(self, source: str | os.PathLike, count: int) -> None:
+        """Start with the first ``count`` frames of another result file (a resumed run)."""
+        self._check_open()
+        with open_result(source) as h5:
+            for name in _complete_frames(h5)[:count]:
+                h5.copy(h5["frames"][name], self._file["frames"], name=name)
+        self.frame_count = count
+        self._file.flush()
 
     def _flush_series(self) -> None:
         if not self._series_rows:

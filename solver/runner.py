@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from solver import __version__
+from solver import checkpoint
 from solver.fields import frame_fields
 from solver.preview import finish_outputs
 from solver.scene import Scene, load_scene
@@ -104,8 +105,13 @@ def run(
     out_dir: str | Path,
     progress: Callable[[ProgressInfo], None] | None = None,
     should_stop: Callable[[], bool] | None = None,
+    resume: bool = False,
+    checkpoint_seconds: float | None = None,
 ) -> Result:
     """Run a scene to its end time; write result.h5, result.xdmf and preview.png into out_dir.
+
+    Writes restart checkpoints (solver/checkpoint.py: the scene's `output.checkpoint`, else
+    every `checkpoint_seconds`); `resume` continues from the one in out_dir when there is one.
 
     Never raises for a numerical instability: the run stops, the frames written
     so far stay readable with status "partial", and the Result names the step,
@@ -131,11 +137,17 @@ def run(
     last_report = started
     last_energies = {}
     dt = fixed_dt or sim.stable_time_step(scene.time.cfl)
+    restart = checkpoint.resume(sim, out_dir) if resume else None
+    if restart is not None:
+        dt, frames.next = restart.dt, restart.frame_next
 
     writer = domain.writer(out_dir, scene, __version__)   # a ResultWriter on rank 0
     with writer, _StopSignals() as signals:
+        checkpoints = checkpoint.Checkpointer(out_dir, scene, checkpoint.Policy.of(scene, checkpoint_seconds),
+                                              writer, restart)
         try:
             while True:
+                checkpoints.top_of_step(sim, dt, frames.next)
                 if frames.due(sim.time, dt):
                     fields = domain.gather(frame_fields(sim, scene.output.fields))   # sorted by id
                     writer.write_frame(sim.step_count, sim.time, fields)
@@ -175,6 +187,7 @@ def run(
                 sim.advance(dt)
         except Instability as err:
             reason, message = "unstable", str(err)
+        checkpoints.finish(sim, reason)
         status = "complete" if reason == "finished" else "partial"
         writer.close(status)
 

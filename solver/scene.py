@@ -104,7 +104,8 @@ def _number_or_expression(variables: tuple[str, ...]):
             try:
                 compile_expression(value, variables)
             except ExpressionError as exc:
-                raise _error(f"invalid expression {value!r}: {exc}") from None
+                shown = value if len(value) <= 80 else value[:60] + "..."  # not a huge input echoed
+                raise _error(f"invalid expression {shown!r}: {exc}") from None
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise _error(f"must be a number or an expression string in {', '.join(variables)}")
@@ -442,7 +443,7 @@ class Body(_Model):
     name: Annotated[str, Field(min_length=1)]
     material: str
     geometry: GeometrySpec
-    particles_per_cell: Annotated[int, Strict(), Field(ge=1)] = 2  # per axis
+    particles_per_cell: Annotated[int, Strict(), Field(ge=1, le=100)] = 2  # per axis; bounded before any allocation
     initial_velocity: list[SpaceValue] | None = None  # None: at rest
     initial_temperature: NonNegative | None = None
     initial_density: Positive | None = None  # ideal_gas bodies only
@@ -536,11 +537,24 @@ class Preview(_Model):
         return value
 
 
+class Checkpoint(_Model):
+    """Restart checkpoints (solver/checkpoint.py): every N steps and/or M seconds of wall time."""
+    every_steps: Annotated[int, Strict(), Field(ge=1)] | None = None
+    every_seconds: Positive | None = None
+
+    @model_validator(mode="after")
+    def _one_given(self) -> "Checkpoint":
+        if self.every_steps is None and self.every_seconds is None:
+            raise _error("give every_steps, every_seconds or both")
+        return self
+
+
 class Output(_Model):
     frames: Annotated[int, Strict(), Field(ge=2)] = 51  # first and last included
     fields: list[str] = Field(default_factory=lambda: ["position", "velocity", "stress"])
     energies: Energies = True  # or N: every N steps
     preview: Preview = Field(default_factory=Preview)
+    checkpoint: Checkpoint | None = None  # unset: the runner's interval (every minute by default)
 
     @field_validator("fields")
     @classmethod

@@ -55,7 +55,7 @@ def count_particles(scene: Scene, *, stop_above: int | None = None) -> list[int]
     checks); the counts are then lower bounds whose sum exceeds ``stop_above``."""
     counts = [0] * len(scene.bodies)
     for index, body in enumerate(scene.bodies):
-        for _, inside in _inside_chunks(scene, body):
+        for _, inside in _inside_chunks(scene, body, spread=stop_above is not None):
             counts[index] += int(np.count_nonzero(inside))
             if stop_above is not None and sum(counts) > stop_above:
                 return counts
@@ -82,13 +82,26 @@ def candidate_coordinates(scene: Scene, body: Body) -> list[np.ndarray]:
     return axes
 
 
-def _inside_chunks(scene: Scene, body: Body) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """(candidate points, inside mask) chunk by chunk, in C order of the candidates."""
+def _inside_chunks(scene: Scene, body: Body, spread: bool = False) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """(candidate points, inside mask) chunk by chunk, in C order of the candidates, or
+    with ``spread`` in an order that samples the whole bounding box from the start (so
+    that a count stopping at a limit is not spent on the box's empty first rows)."""
     axes = candidate_coordinates(scene, body)
     shape = tuple(len(axis) for axis in axes)
     total = math.prod(shape)
     geometry = body.geometry.shape()
-    for start in range(0, total, CHUNK):
+    starts = range(0, total, CHUNK)
+    for start in (_spread(starts) if spread else starts):
         index = np.unravel_index(np.arange(start, min(start + CHUNK, total)), shape)
         points = np.stack([axis[i] for axis, i in zip(axes, index)], axis=1)
         yield points, geometry.contains(points)
+
+
+def _spread(items: range) -> Iterator[int]:
+    """Every item once, by a stride coprime with the length (about 0.618 of it)."""
+    n = len(items)
+    stride = max(1, round(n * 0.618034))
+    while math.gcd(stride, n) != 1:
+        stride += 1
+    for i in range(n):
+        yield items[(i * stride) % n]

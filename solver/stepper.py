@@ -98,6 +98,11 @@ class ExplicitMPM:
         if moved >= PARTICLES_MOVED:
             self._place_particles()
 
+    def place(self) -> None:
+        """Grid and per-particle work arrays for the particles this process holds now."""
+        self._place_grid()
+        self._place_particles()
+
     def _place_grid(self) -> None:
         self.grid = self.domain.grid(self.scene)
         self.constraints = self.domain.constraints(self.scene, self.grid)

@@ -97,6 +97,10 @@ class TotalLagrangianMPM(ExplicitMPM):
 
     # -- phases -----------------------------------------------------------------
 
+    def place(self) -> None:
+        super().place()
+        self._reference_weights()          # a new stencil (a restart): the reference weights again
+
     def _reference_weights(self) -> None:
         """phi_I(X_p) and grad0 phi_I(X_p): the stencil never changes afterwards."""
         p, g, s = self.particles, self.grid, self.stencil

@@ -10,6 +10,7 @@ import sys
 from celery.signals import worker_ready, worker_shutdown
 
 from worker.celery_app import QUEUE, enqueue, make_celery
+from worker.disk import remove_expired
 from worker.heartbeat import Heartbeat
 from worker.logs import configure_logging
 from worker.settings import get_settings
@@ -50,7 +51,9 @@ def worker_command(args: argparse.Namespace) -> int:
 
     from worker.tasks import get_store  # the task module registers the task with `app`
     heartbeat = Heartbeat(get_store(), name, lambda job_id: enqueue(app, job_id),
-                          sweep_every=settings.lease_seconds / 3)
+                          sweep_every=settings.lease_seconds / 3,
+                          retain=lambda: remove_expired(get_store(), settings.jobs_dir, settings.retention_days),
+                          retain_every=min(3600.0, settings.retention_days * 86400 / 10))
     worker_ready.connect(lambda **_: heartbeat.start(), weak=False)
     worker_shutdown.connect(lambda **_: heartbeat.stop(), weak=False)
 

@@ -1,6 +1,7 @@
-"""A worker's heartbeat in Redis (`/readyz` counts the workers seen recently), and the
+"""A worker's heartbeat in Redis (`/readyz` counts the workers seen recently), the
 recovery of jobs whose worker died: their lease expires, and a live worker puts
-them back on the queue (instead of waiting for the broker's visibility timeout)."""
+them back on the queue (instead of waiting for the broker's visibility timeout),
+and the periodic removal of results past their retention period."""
 from __future__ import annotations
 
 import logging
@@ -21,9 +22,11 @@ MAX_AGE = 10.0
 
 class Heartbeat:
     def __init__(self, store: JobStore, worker: str, enqueue: Callable[[str], None],
-                 sweep_every: float):
+                 sweep_every: float, retain: Callable[[], object] | None = None,
+                 retain_every: float = 3600.0):
         self.store, self.worker, self.enqueue = store, worker, enqueue
         self.sweep_every = sweep_every
+        self.retain, self.retain_every = retain, retain_every
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._beat, name="mpm-heartbeat", daemon=True)
 
@@ -39,7 +42,7 @@ class Heartbeat:
             pass
 
     def _beat(self) -> None:
-        next_sweep = 0.0
+        next_sweep = next_retention = 0.0
         while not self._stop.is_set():
             try:
                 self.store.heartbeat(self.worker)
@@ -49,6 +52,9 @@ class Heartbeat:
                         log.warning("job requeued: its worker was lost",
                                     extra={"job_id": job_id, "worker": self.worker})
                         self.enqueue(job_id)
+                if self.retain is not None and time.monotonic() >= next_retention:
+                    next_retention = time.monotonic() + self.retain_every
+                    self.retain()
             except redis.RedisError as exc:
                 log.warning("heartbeat failed: %s", exc, extra={"worker": self.worker})
             self._stop.wait(INTERVAL)

@@ -32,12 +32,18 @@ class Outcome:
     log_tail: str               # the end of the solver's stderr, for diagnostics
 
 
-def solver_command(scene: Path, out_dir: Path, processes: int = 1,
-                   progress: str = "json") -> list[str]:
-    # -n: the processes granted, whatever the scene asks; for K > 1 the solver turns
-    # itself into mpiexec with K ranks (same pid, same process group)
-    return [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out_dir),
-            "--progress", progress, "-n", str(processes)]
+def solver_command(scene: Path, out_dir: Path, processes: int = 1, progress: str = "json",
+                   checkpoint_seconds: float | None = None) -> list[str]:
+    """With `checkpoint_seconds`: checkpoints that often, and a run that goes on from the
+    checkpoint in `out_dir` when there is one (a job run again after a crash).
+
+    -n: the processes granted, whatever the scene asks; for K > 1 the solver turns
+    itself into mpiexec with K ranks (same pid, same process group)."""
+    command = [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out_dir),
+               "--progress", progress, "-n", str(processes)]
+    if checkpoint_seconds is not None:
+        command += ["--resume", str(out_dir), "--checkpoint-seconds", repr(checkpoint_seconds)]
+    return command
 
 
 def die_with_parent() -> None:
@@ -87,8 +93,9 @@ def run_solver(command: list[str], log_path: Path, *,
                timeout_seconds: float | None = None) -> Outcome:
     """Run `command` to its end, or until `should_stop()` names a reason to stop it.
 
-    `should_stop` is polled every `poll_interval` seconds; `on_progress` receives the
-    solver's progress lines, the latest at most every `progress_interval` seconds."""
+    `should_stop` is polled every `poll_interval` seconds until the command has exited;
+    `on_progress` receives the solver's progress lines, the latest at most every
+    `progress_interval` seconds."""
     lines: queue.Queue = queue.Queue()
     done: ProgressLine | None = None
     pending: ProgressLine | None = None
@@ -123,13 +130,18 @@ def run_solver(command: list[str], log_path: Path, *,
                     pending, last_sent = None, now
                 if now >= next_poll:
                     next_poll = now + poll_interval
+                    # Polled to the end, a stop's grace period included: it renews the job's lease.
+                    reason = should_stop()
                     if stopped is None:
-                        stopped = should_stop()
+                        stopped = reason
                         if stopped is None and timeout_seconds and now - started > timeout_seconds:
                             stopped = "timeout"
                         if stopped is not None:
                             _kill_group(process, signal.SIGTERM)
                             term_sent_at = now
+                    if reason == "lease_lost":  # the folder is another run's now: no last write
+                        stopped = reason
+                        _kill_group(process, signal.SIGKILL)
                     elif term_sent_at is not None and now - term_sent_at > grace_seconds:
                         _kill_group(process, signal.SIGKILL)
                         term_sent_at = None

@@ -56,6 +56,27 @@ class Settings(BaseSettings):
     lease_seconds: float = Field(30.0, gt=0, description="a running job whose worker is silent this "
                                                           "long is put back on the queue")
 
+    # Access, per-owner quotas and request hardening (service/auth.py, quotas.py, json_depth.py).
+    api_tokens: str | None = Field(None, description="`owner:token,...` or `@FILE` (one owner:token a "
+                                                     "line); unset: no tokens, and 127.0.0.1 only")
+    quota_active_jobs: int = Field(20, gt=0, description="queued + running jobs of one owner")
+    quota_queued_jobs: int = Field(10, gt=0, description="queued jobs of one owner")
+    quota_particle_steps_per_day: float = Field(1e12, gt=0, description="particles x estimated steps "
+                                                "one owner may submit per UTC day")
+    max_json_depth: int = Field(64, gt=0, description="deepest nesting of a JSON request body")
+    cors_origins: str = Field("", description="comma-separated origins a browser may call the API "
+                                              "from; empty: CORS off")
+
+    # Nothing lost: checkpoints, attempts, disk (docs/reliability.md).
+    checkpoint_seconds: float = Field(60.0, gt=0, description="wall-clock seconds between a job's "
+                                                               "restart checkpoints")
+    max_attempts: int = Field(3, ge=1, description="starts of a job whose run was lost (worker or "
+                                                    "solver killed) before it is failed")
+    max_job_bytes: int = Field(20 * 2**30, gt=0, description="size limit of one job's folder")
+    max_total_bytes: int = Field(500 * 2**30, gt=0, description="size limit of all jobs' folders")
+    retention_days: float = Field(30.0, ge=0, description="finished jobs older than this are deleted "
+                                                           "with their files (0: kept for ever)")
+
     log_level: str = "INFO"
 
     @property

@@ -32,23 +32,58 @@ def status_index(status: str) -> str:
     return f"{PREFIX}jobs:{status}"
 
 
+def owner_index(owner: str) -> str:
+    """An owner's jobs (every status), by creation time."""
+    return f"{PREFIX}owner:{owner}:jobs"
+
+
+def usage_key(owner: str, day: str) -> str:
+    """The particle-steps an owner was charged on a UTC day (YYYY-MM-DD)."""
+    return f"{PREFIX}owner:{owner}:usage:{day}"
+
+
 def lease_key(job_id: str) -> str:
     return f"{PREFIX}job:{job_id}:lease"
+
+
+def today() -> str:
+    """The UTC date, the day of the daily quotas."""
+    return datetime.now(timezone.utc).date().isoformat()
 
 
 def now_iso() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
 
 
-# KEYS: job, all index, queued index, running index.
-# ARGV: id, score, max_active, then field/value pairs. Returns 1, or 0 when over quota.
+# KEYS: job, all index, queued index, running index, owner index, owner's usage today.
+# ARGV: id, score, max_active, owner (JSON-encoded; '' for none), owner's max active,
+# owner's max queued, cost, owner's max cost a day, then field/value pairs.
+# Returns '' when stored, else the limit that refused it (nothing is stored then).
 _CREATE = """
-local active = redis.call('ZCARD', KEYS[3]) + redis.call('ZCARD', KEYS[4])
-if active >= tonumber(ARGV[3]) then return 0 end
-redis.call('HSET', KEYS[1], unpack(ARGV, 4))
+local queued = redis.call('ZRANGE', KEYS[3], 0, -1)
+local running = redis.call('ZRANGE', KEYS[4], 0, -1)
+if #queued + #running >= tonumber(ARGV[3]) then return 'max_active' end
+if ARGV[4] ~= '' then
+  local prefix = string.sub(KEYS[1], 1, #KEYS[1] - #ARGV[1])
+  local mine_queued, mine_running = 0, 0
+  for _, id in ipairs(queued) do
+    if redis.call('HGET', prefix .. id, 'owner') == ARGV[4] then mine_queued = mine_queued + 1 end
+  end
+  for _, id in ipairs(running) do
+    if redis.call('HGET', prefix .. id, 'owner') == ARGV[4] then mine_running = mine_running + 1 end
+  end
+  if mine_queued + mine_running >= tonumber(ARGV[5]) then return 'owner_active' end
+  if mine_queued >= tonumber(ARGV[6]) then return 'owner_queued' end
+  local used = tonumber(redis.call('GET', KEYS[6]) or '0')
+  if used + tonumber(ARGV[7]) > tonumber(ARGV[8]) then return 'owner_daily' end
+  redis.call('INCRBY', KEYS[6], ARGV[7])  -- not INCRBYFLOAT: Redis 6.2 crashes logging it to the AOF
+  redis.call('EXPIRE', KEYS[6], 2 * 86400)
+  redis.call('ZADD', KEYS[5], ARGV[2], ARGV[1])
+end
+redis.call('HSET', KEYS[1], unpack(ARGV, 9))
 redis.call('ZADD', KEYS[2], ARGV[2], ARGV[1])
 redis.call('ZADD', KEYS[3], ARGV[2], ARGV[1])
-return 1
+return ''
 """
 
 # KEYS: job, all index. ARGV: id, status-index prefix, new status, allowed statuses
@@ -71,7 +106,7 @@ end
 return current
 """
 
-# KEYS: job, all index. ARGV: id, status-index prefix, allowed statuses.
+# KEYS: job, all index. ARGV: id, status-index prefix, allowed statuses, owner-index prefix.
 # Removes the record when its status is allowed; returns the status (nil: no job).
 _DELETE = """
 local raw = redis.call('HGET', KEYS[1], 'status')
@@ -79,6 +114,10 @@ if not raw then return nil end
 local current = cjson.decode(raw)
 for s in string.gmatch(ARGV[3], '%S+') do
   if s == current then
+    local owner = redis.call('HGET', KEYS[1], 'owner')
+    if owner and owner ~= 'null' then
+      redis.call('ZREM', ARGV[4] .. cjson.decode(owner) .. ':jobs', ARGV[1])
+    end
     redis.call('DEL', KEYS[1])
     redis.call('ZREM', KEYS[2], ARGV[1])
     redis.call('ZREM', ARGV[2] .. current, ARGV[1])
@@ -103,7 +142,8 @@ return 0
 
 
 # KEYS: running index, queued index. ARGV: key prefix.
-# A running job whose lease is gone lost its worker: back to queued. Returns their ids.
+# A running job whose lease is gone lost its worker: back to queued, counted in `lost`
+# (worker/tasks.py fails a job lost too often). Returns their ids.
 _REQUEUE_ORPHANS = """
 local out = {}
 for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
@@ -113,11 +153,22 @@ for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
     redis.call('ZADD', KEYS[2], score, id)
     redis.call('HSET', ARGV[1] .. 'job:' .. id, 'status', '"queued"', 'started_at', 'null',
                'progress', '0.0', 'step', '0')
+    redis.call('HINCRBY', ARGV[1] .. 'job:' .. id, 'lost', 1)
     table.insert(out, id)
   end
 end
 return out
 """
+
+
+@dataclass(frozen=True)
+class OwnerQuota:
+    """What one owner may have at once, and submit in a day (checked with the job's creation)."""
+    owner: str
+    max_active: int      # queued + running
+    max_queued: int
+    cost: int            # what this job is charged: particles x estimated steps
+    max_daily_cost: float
 
 
 @dataclass
@@ -171,12 +222,26 @@ class JobStore:
 
     def create(self, job_id: str, fields: dict[str, Any], max_active: int) -> bool:
         """Store a new queued job; False when `max_active` jobs are already queued or running."""
-        fields = {**fields, "id": job_id, "status": "queued"}
+        return self.admit(job_id, fields, max_active) is None
+
+    def admit(self, job_id: str, fields: dict[str, Any], max_active: int,
+              quota: OwnerQuota | None = None) -> str | None:
+        """Store a new queued job (of `quota.owner`, charged `quota.cost` today) unless a
+        limit refuses it. Returns None, or which limit: "max_active" (the service's),
+        "owner_active", "owner_queued" or "owner_daily"."""
+        owner = quota.owner if quota else None
+        fields = {**fields, "id": job_id, "status": "queued", "owner": owner}
         score = time.time_ns() // 1000
-        done = self._create(
-            keys=[job_key(job_id), ALL_INDEX, status_index("queued"), status_index("running")],
-            args=[job_id, score, max_active, *self._pairs(fields)])
-        return bool(done)
+        limits = ([json.dumps(owner), quota.max_active, quota.max_queued, quota.cost,
+                   repr(float(quota.max_daily_cost))] if quota else ["", 0, 0, 0, 0])
+        refused = self._create(
+            keys=[job_key(job_id), ALL_INDEX, status_index("queued"), status_index("running"),
+                  owner_index(owner or ""), usage_key(owner or "", today())],
+            args=[job_id, score, max_active, *limits, *self._pairs(fields)])
+        return refused or None
+
+    def usage_today(self, owner: str) -> float:
+        return float(self.redis.get(usage_key(owner, today())) or 0)
 
     def get(self, job_id: str) -> dict[str, Any] | None:
         return self.decode(self.redis.hgetall(job_key(job_id)))
@@ -214,36 +279,49 @@ class JobStore:
 
         Returns the status (None: no such job)."""
         return self._delete(keys=[job_key(job_id), ALL_INDEX],
-                            args=[job_id, PREFIX + "jobs:", " ".join(allowed)])
+                            args=[job_id, PREFIX + "jobs:", " ".join(allowed), PREFIX + "owner:"])
 
     def count_active(self) -> int:
         return sum(self.redis.zcard(status_index(s)) for s in ACTIVE)
 
-    def list(self, status: str | None = None, limit: int = 50, cursor: str | None = None) -> Page:
-        """Newest first, `limit` at a time; `cursor` is the previous page's `next_cursor`."""
-        index = status_index(status) if status else ALL_INDEX
+    def list(self, status: str | None = None, limit: int = 50, cursor: str | None = None,
+             owner: str | None = None) -> Page:
+        """Newest first, `limit` at a time; `cursor` is the previous page's `next_cursor`.
+        With `owner`, only that owner's jobs (read from the owner's index, filtered by status)."""
+        after = _decode_cursor(cursor) if cursor else None
+        if owner is None:
+            index, wanted = (status_index(status) if status else ALL_INDEX), None
+        else:
+            index, wanted = owner_index(owner), status
+        kept: list[tuple[dict[str, Any], int]] = []
+        while len(kept) <= limit:
+            rows = self._rows_after(index, after, limit + 1)
+            pipe = self.redis.pipeline(transaction=False)
+            for job_id, _ in rows:
+                pipe.hgetall(job_key(job_id))
+            for (_, score), job in zip(rows, map(self.decode, pipe.execute())):
+                if job and (wanted is None or job["status"] == wanted):
+                    kept.append((job, score))
+            if len(rows) <= limit:  # the index has no more
+                break
+            after = (rows[-1][1], rows[-1][0])
+        next_cursor = _encode_cursor(kept[limit - 1][1], kept[limit - 1][0]["id"]) if len(kept) > limit else None
+        return Page([job for job, _ in kept[:limit]], next_cursor)
+
+    def _rows_after(self, index: str, after: tuple[int, str] | None, count: int) -> list[tuple[str, int]]:
+        """Up to `count` (id, score) of `index` that come after `after` (newest first)."""
         top: str | int = "+inf"
-        skip_from: tuple[int, str] | None = None
         extra = 0
-        if cursor:
-            skip_from = _decode_cursor(cursor)
-            top = skip_from[0]
+        if after:
+            top = after[0]
             # Jobs created in the same microsecond share a score: fetch them all, then
             # keep only those after the cursor in (score, id) descending order.
             extra = self.redis.zcount(index, top, top)
-        rows = self.redis.zrevrangebyscore(index, top, "-inf", start=0, num=limit + 1 + extra,
-                                           withscores=True)
+        rows = self.redis.zrevrangebyscore(index, top, "-inf", start=0, num=count + extra, withscores=True)
         rows = [(job_id, int(score)) for job_id, score in rows]
-        if skip_from:
-            rows = [r for r in rows if (r[1], r[0]) < skip_from]
-        has_more = len(rows) > limit
-        rows = rows[:limit]
-        pipe = self.redis.pipeline(transaction=False)
-        for job_id, _ in rows:
-            pipe.hgetall(job_key(job_id))
-        jobs = [job for job in map(self.decode, pipe.execute()) if job]
-        next_cursor = _encode_cursor(rows[-1][1], rows[-1][0]) if has_more and rows else None
-        return Page(jobs, next_cursor)
+        if after:
+            rows = [r for r in rows if (r[1], r[0]) < after]
+        return rows[:count]
 
     # -- the lease of a running job ----------------------------------------------
 

@@ -3,8 +3,13 @@
 The task is idempotent and safe to redeliver. A finished or deleted job is
 skipped; a lease in Redis makes sure only one worker runs a job at a time (a
 copy redelivered while the first run is alive finds the lease taken); a job
-found `running` with a free lease was lost with its worker and is run again
-from the start. When the worker shuts down the job goes back to the queue.
+found `running` with a free lease was lost with its worker and runs again. When
+the worker shuts down the job goes back to the queue.
+
+Nothing is lost: the solver writes restart checkpoints into the job's folder, and a
+job run again (after its worker or its solver process was killed, or a shutdown)
+goes on from the last one. A job whose run was lost `MPM_MAX_ATTEMPTS` times is
+failed with the reason; a job whose results outgrow the disk limits is failed too.
 """
 from __future__ import annotations
 
@@ -21,10 +26,12 @@ from celery import shared_task
 from celery.exceptions import Reject
 from celery.signals import worker_shutting_down
 
+from solver.checkpoint import checkpoint_path
 from worker.celery_app import TASK_NAME
+from worker.disk import DiskQuota
 from worker.paths import JobFiles, parse_job_id
 from worker.runner import Outcome, run_solver, solver_command
-from worker.settings import get_settings
+from worker.settings import Settings, get_settings
 from worker.store import FINISHED, JobStore, now_iso
 
 log = logging.getLogger("mpm.worker")
@@ -72,23 +79,32 @@ def run_job(self, job_id: str) -> None:
 def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, token: str) -> None:
     settings = get_settings()
     files = JobFiles(settings.jobs_dir, job_id)
+    # Found running with a free lease: its worker was lost (the sweep of the heartbeat
+    # counts the ones it puts back on the queue itself).
+    lost = job.get("lost", 0) + (job["status"] == "running")
+    if lost >= settings.max_attempts:
+        _give_up(store, job_id, files, lost, "its worker was lost")
+        return
     before = store.transition(
         job_id, ["queued", "running"], "running", started_at=now_iso(), worker=worker,
-        attempts=job.get("attempts", 0) + 1, progress=0.0, step=0, sim_time=0.0,
-        steps_per_second=None, eta_seconds=None, error=None)
+        attempts=job.get("attempts", 0) + 1, lost=lost, steps_per_second=None, eta_seconds=None,
+        error=None)
     if before not in ("queued", "running"):
         log.info("job skipped: it is %s", before, extra={"job_id": job_id})
         return
     if before == "running":
         log.warning("job restarted: its worker was lost", extra={"job_id": job_id})
-    # A rerun starts from a clean folder: only the scene is kept.
-    for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
-        stale.unlink(missing_ok=True)
-    shutil.rmtree(files.previews, ignore_errors=True)
+    resuming = checkpoint_path(files.dir).exists()
+    if not resuming:  # a run again without a checkpoint starts from a clean folder
+        for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
+            stale.unlink(missing_ok=True)
+        shutil.rmtree(files.previews, ignore_errors=True)
     if store.cancel_requested(job_id):
         store.transition(job_id, ["running"], "cancelled", finished_at=now_iso())
         return
-    log.info("job started", extra={"job_id": job_id, "worker": worker})
+    log.info("job resumed from its checkpoint" if resuming else "job started",
+             extra={"job_id": job_id, "worker": worker})
+    quota = DiskQuota(settings.jobs_dir, files.dir, settings.max_job_bytes, settings.max_total_bytes)
 
     lease_renewed = time.monotonic()
 
@@ -99,6 +115,8 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         nonlocal lease_renewed
         if _shutting_down.is_set():
             return "shutdown"
+        if quota.check() is not None:
+            return "disk_quota"
         try:
             if time.monotonic() - lease_renewed > settings.lease_seconds / 6:
                 if not store.renew_lease(job_id, token, settings.lease_seconds):
@@ -117,20 +135,59 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         except redis.RedisError as exc:
             log.warning("progress not recorded: %s", exc, extra={"job_id": job_id})
 
-    outcome = run_solver(
-        solver_command(files.scene, files.dir, job.get("processes", 1)), files.log,
-        on_progress=on_progress, should_stop=should_stop,
-        progress_interval=settings.progress_interval,
-        grace_seconds=settings.cancel_grace_seconds,
-        timeout_seconds=settings.max_job_seconds)
-    _finish(store, job_id, outcome, settings.max_job_seconds)
+    command = solver_command(files.scene, files.dir, job.get("processes", 1),
+                             checkpoint_seconds=settings.checkpoint_seconds)
+    while True:
+        outcome = run_solver(
+            command, files.log, on_progress=on_progress, should_stop=should_stop,
+            progress_interval=settings.progress_interval,
+            grace_seconds=settings.cancel_grace_seconds,
+            timeout_seconds=settings.max_job_seconds)
+        if not _killed(outcome):
+            break
+        lost += 1
+        if lost >= settings.max_attempts:
+            _give_up(store, job_id, files, lost, f"its solver was killed by signal {-outcome.returncode}")
+            return
+        log.warning("solver killed by signal %d: resuming from its checkpoint", -outcome.returncode,
+                    extra={"job_id": job_id, "lost": lost})
+        _retry_redis(lambda: store.update_running(job_id, lost=lost))
+    _finish(store, job_id, files, outcome, settings, quota)
 
 
-def _finish(store: JobStore, job_id: str, outcome: Outcome, max_job_seconds: float) -> None:
+def _killed(outcome: Outcome) -> bool:
+    """The solver process died by a signal we did not send (kill -9, out of memory)."""
+    return outcome.stopped is None and outcome.returncode < 0
+
+
+def _give_up(store: JobStore, job_id: str, files: JobFiles, lost: int, why: str) -> None:
+    error = (f"the run was lost {lost} times (last: {why}); given up after MPM_MAX_ATTEMPTS = "
+             f"{get_settings().max_attempts}")
+    _retry_redis(lambda: store.transition(job_id, ["queued", "running"], "failed", error=error, lost=lost,
+                                          eta_seconds=None, finished_at=now_iso()))
+    checkpoint_path(files.dir).unlink(missing_ok=True)
+    log.error("job failed: %s", error, extra={"job_id": job_id})
+
+
+def _retry_redis(call, seconds: float = 300.0):
+    """`call()`, tried again while Redis is away (restarting), up to `seconds`."""
+    deadline = time.monotonic() + seconds
+    while True:
+        try:
+            return call()
+        except redis.RedisError as exc:
+            if time.monotonic() > deadline:
+                raise
+            log.warning("redis unavailable, retrying: %s", exc)
+            time.sleep(1.0)
+
+
+def _finish(store: JobStore, job_id: str, files: JobFiles, outcome: Outcome, settings: Settings,
+            quota: DiskQuota) -> None:
     done = outcome.done or {}
     extra = {"job_id": job_id, "returncode": outcome.returncode, "reason": done.get("reason")}
-    if outcome.stopped == "shutdown":
-        store.transition(job_id, ["running"], "queued", started_at=None, progress=0.0, step=0)
+    if outcome.stopped == "shutdown":  # the solver left a checkpoint where it stopped
+        _retry_redis(lambda: store.transition(job_id, ["running"], "queued", started_at=None))
         log.warning("job requeued: the worker is shutting down", extra=extra)
         raise Reject("worker shutting down", requeue=True)
 
@@ -142,7 +199,10 @@ def _finish(store: JobStore, job_id: str, outcome: Outcome, max_job_seconds: flo
     if outcome.stopped == "cancelled":
         status, error = "cancelled", None
     elif outcome.stopped == "timeout":
-        status, error = "failed", f"stopped after the time limit of {max_job_seconds:g} s (MPM_MAX_JOB_SECONDS)"
+        status, error = "failed", (f"stopped after the time limit of {settings.max_job_seconds:g} s "
+                                   "(MPM_MAX_JOB_SECONDS)")
+    elif outcome.stopped == "disk_quota":
+        status, error = "failed", f"stopped: {quota.reason}"
     elif outcome.returncode == 0 and done.get("status") == "complete":
         status, error = "succeeded", None
         final.update(progress=1.0)
@@ -153,5 +213,6 @@ def _finish(store: JobStore, job_id: str, outcome: Outcome, max_job_seconds: flo
                  or f"the solver exited with code {outcome.returncode}")
     if "steps" in done:
         final.update(step=done["steps"], sim_time=done.get("time"))
-    store.transition(job_id, ["running"], status, error=error, eta_seconds=None, **final)
+    _retry_redis(lambda: store.transition(job_id, ["running"], status, error=error, eta_seconds=None, **final))
+    checkpoint_path(files.dir).unlink(missing_ok=True)  # over for good: nothing to resume
     log.info("job %s", status, extra={**extra, "error": error})

@@ -114,9 +114,10 @@
   /** The service could not be reached (or a gateway in front of it answered 502/503/504). */
   class ConnectionLost extends Error {}
 
+  // The API token lives in this tab's session storage: gone when the tab closes, never in a URL.
   const auth = {
-    get token() { return localStorage.getItem("mpm.token") || ""; },
-    set token(value) { value ? localStorage.setItem("mpm.token", value) : localStorage.removeItem("mpm.token"); },
+    get token() { return sessionStorage.getItem("mpm.token") || ""; },
+    set token(value) { value ? sessionStorage.setItem("mpm.token", value) : sessionStorage.removeItem("mpm.token"); },
   };
 
   /** Call the API with a relative URL (the dashboard is served beside it); parses JSON unless raw. */

@@ -41,6 +41,9 @@ class SingleProcess:
     def migrate(self, particles, step: int) -> int:
         return UNCHANGED
 
+    def barrier(self) -> None:
+        pass
+
     def fail(self, error: Exception) -> None:
         raise error
 

@@ -40,6 +40,8 @@ def mpm_executable() -> Path:
 class LiveService:
     """`mpm serve --port PORT` with a private data folder; `url` once started."""
 
+    serve_options: tuple[str, ...] = ()  # more `mpm serve` options, for subclasses
+
     def __init__(self, data_dir: Path, log_path: Path) -> None:
         self.data_dir = data_dir
         self.log_path = log_path
@@ -62,7 +64,7 @@ class LiveService:
     def start(self) -> "LiveService":
         with open(self.log_path, "ab") as log:
             self.process = subprocess.Popen(
-                [str(mpm_executable()), "serve", "--port", str(self.port)], env=self.environment(),
+                [str(mpm_executable()), "serve", "--port", str(self.port), *self.serve_options], env=self.environment(),
                 stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
         deadline = time.monotonic() + START_TIMEOUT
         while time.monotonic() < deadline:

@@ -1,0 +1,139 @@
+"""A table of hostile inputs against the live service with tokens: each is answered
+4xx in the error format, naming the field (or the rule) it breaks, quickly, and the
+service is healthy and working afterwards."""
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+
+from service_support import two_disks
+
+MAX_BODY = 300_000  # MPM_MAX_BODY_BYTES of the secure service (secure_service.py)
+
+
+def _scene(change) -> dict:
+    scene = two_disks()
+    change(scene)
+    return scene
+
+
+def _velocity(expression: str):
+    return lambda s: s["bodies"][0].update(initial_velocity=[expression, 0])
+
+
+def _nested(depth: int) -> bytes:
+    return b'{"scene": ' + b"[" * depth + b"]" * depth + b"}"
+
+
+# A 1 m cube of 1 cm cells (10^6 nodes, within MPM_MAX_GRID_NODES), filled with 100^3 particles a cell
+TRILLION_PARTICLES = {
+    "version": 1, "name": "trillion", "dimension": 3,
+    "grid": {"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.01},
+    "materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1e6, "poisson_ratio": 0.3}},
+    "bodies": [{"name": "block", "material": "m", "particles_per_cell": 100,
+                "geometry": {"type": "box", "lower": [0, 0, 0], "upper": [1, 1, 1]}}],
+    "time": {"end": 0.01, "dt": 1e-3},
+}
+
+# (name, method, path, body: dict (sent as JSON) or bytes (sent as they are),
+#  the status, the path the error must name ("" for the body as a whole), a word of the message)
+HOSTILE = [
+    ("deeply nested JSON", "POST", "/v1/jobs", _nested(100_000), 422, "", "MPM_MAX_JSON_DEPTH"),
+    ("nested just past the limit", "POST", "/v1/scenes/validate",
+     b'{"name": ' + b"[" * 64 + b"]" * 64 + b"}", 422, "", "MPM_MAX_JSON_DEPTH"),
+    ("nested inside the limit, in a field", "POST", "/v1/scenes/validate",
+     json.dumps(_scene(lambda s: s.update(name=[[[[[[1]]]]]]))).encode(), 422, "name", "string"),
+    ("huge array body", "POST", "/v1/jobs", b'{"scene": [' + b"0," * 200_000 + b"0]}", 413, None, "bytes"),
+    ("huge array in a field", "POST", "/v1/scenes/validate",
+     _scene(lambda s: s["grid"].update(lower=[0.0] * 20_000)), 422, "grid.lower", "at most 3"),
+    ("NaN literal", "POST", "/v1/scenes/validate",
+     json.dumps(two_disks()).replace('"density": 1000', '"density": NaN').encode(), 422,
+     "materials.rubber.density", "finite"),
+    ("Infinity literal", "POST", "/v1/jobs",
+     b'{"scene": ' + json.dumps(two_disks()).replace('"end": 1.0', '"end": Infinity').encode() + b"}",
+     422, "time.end", "finite"),
+    ("-Infinity as processes", "POST", "/v1/jobs",
+     b'{"scene": ' + json.dumps(two_disks()).encode() + b', "processes": -Infinity}', 422, "processes", ""),
+    ("attribute access", "POST", "/v1/scenes/validate", _scene(_velocity("x.__class__")), 422,
+     "bodies[0].initial_velocity[0]", "attribute access is not allowed"),
+    ("import", "POST", "/v1/scenes/validate", _scene(_velocity("__import__('os').system('true')")), 422,
+     "bodies[0].initial_velocity[0]", "'__import__'"),
+    ("import statement", "POST", "/v1/scenes/validate", _scene(_velocity("import os")), 422,
+     "bodies[0].initial_velocity[0]", "unknown name 'import'"),
+    ("dunder name", "POST", "/v1/scenes/validate", _scene(_velocity("__builtins__")), 422,
+     "bodies[0].initial_velocity[0]", "unknown name '__builtins__'"),
+    ("exponent bomb", "POST", "/v1/jobs", {"scene": _scene(_velocity("9**9**9"))}, 422,
+     "bodies[0].initial_velocity[0]", "gives inf"),
+    ("division by zero", "POST", "/v1/scenes/validate", _scene(_velocity("x + 1/0")), 422,
+     "bodies[0].initial_velocity[0]", "gives inf"),
+    ("overlong expression", "POST", "/v1/scenes/validate", _scene(_velocity("x+" * 20_000 + "x")), 422,
+     "bodies[0].initial_velocity[0]", "longer than 1000"),
+    ("deeply nested expression", "POST", "/v1/scenes/validate", _scene(_velocity("(" * 200 + "x" + ")" * 200)),
+     422, "bodies[0].initial_velocity[0]", "nested too deeply"),
+    ("10^12 particles", "POST", "/v1/jobs", {"scene": TRILLION_PARTICLES}, 422, "bodies", "MPM_MAX_PARTICLES"),
+    ("a million particles per cell and axis", "POST", "/v1/jobs",
+     {"scene": _scene(lambda s: s["bodies"][0].update(particles_per_cell=1_000_000))}, 422,
+     "bodies[0].particles_per_cell", "100"),
+    ("10^12 grid nodes", "POST", "/v1/jobs", {"scene": _scene(lambda s: s["grid"].update(cell_size=1e-6))},
+     422, "grid", "MPM_MAX_GRID_NODES"),
+    ("10^400 as an integer", "POST", "/v1/scenes/validate",
+     json.dumps(two_disks()).replace('"particles_per_cell": 2', '"particles_per_cell": 1' + "0" * 400, 1).encode(),
+     422, "bodies[0].particles_per_cell", ""),
+    ("unicode control characters in a material name", "POST", "/v1/scenes/validate",
+     _scene(lambda s: s["bodies"][0].update(material="st\u202eeel\u0000")), 422, "bodies[0].material", "st"),
+    ("not JSON at all", "POST", "/v1/jobs", b"\xff\xfe\x00binary", 422, "", "JSON"),
+    ("a list for the request", "POST", "/v1/jobs", [1, 2, 3], 422, "", ""),
+    ("path-like job id", "GET", "/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", None, 404, None, ""),
+    ("dot-dot job id", "DELETE", "/v1/jobs/%2E%2E", None, 404, None, ""),
+    ("job id with a NUL", "GET", "/v1/jobs/%00", None, 404, None, ""),
+    ("path-like example name", "GET", "/v1/examples/..%2F..%2Fpyproject", None, 404, None, ""),
+    ("a huge limit", "GET", "/v1/jobs?limit=100000000000000000000", None, 422, "limit", ""),
+    ("a forged cursor", "GET", "/v1/jobs?cursor=" + "A" * 5000, None, 422, "cursor", ""),
+    ("a hostile preview field", "GET", "/v1/jobs/0b7d5e1c-2a8e-4a55-9d0f-7c1f3b8f6e21/preview.png"
+     "?field=../../etc", None, 422, "field", ""),
+]
+
+
+@pytest.mark.parametrize("name,method,path,body,status,field,words", HOSTILE, ids=[c[0] for c in HOSTILE])
+def test_hostile_input_is_refused_cleanly(alice, name, method, path, body, status, field, words):
+    started = time.monotonic()
+    if body is None:
+        answer = alice.request(method, path)
+    elif isinstance(body, bytes):
+        answer = alice.request(method, path, content=body, headers={"content-type": "application/json"})
+    else:
+        answer = alice.request(method, path, json=body)
+    elapsed = time.monotonic() - started
+    assert answer.status_code == status, answer.text[:500]
+    error = answer.json()["error"]
+    assert set(error) == {"code", "message", "details"}
+    if field is not None:
+        paths = [d["path"] for d in error["details"]]
+        assert field in paths, paths
+        assert any(words in d["message"] for d in error["details"] if d["path"] == field), error
+    else:
+        assert words in error["message"]
+    assert len(answer.content) < 20_000  # a huge input is not echoed back
+    assert elapsed < 10, f"{name} took {elapsed:.1f} s"  # refused before any work is done
+
+    # healthy afterwards: it answers, is ready, and still validates a good scene
+    assert alice.get("/healthz").status_code == 200
+    assert alice.get("/readyz").status_code == 200
+    assert alice.post("/v1/scenes/validate", json=two_disks()).status_code == 200
+
+
+def test_unicode_names_are_kept_as_they_are(alice):
+    scene = two_disks("模拟 — ünïcødé 🚀")
+    scene["materials"] = {"gummi-ß": scene["materials"]["rubber"]}
+    for body in scene["bodies"]:
+        body["material"] = "gummi-ß"
+    answer = alice.post("/v1/jobs", json={"scene": scene})
+    assert answer.status_code == 202, answer.text
+    job = answer.json()
+    try:
+        assert alice.get(f"/v1/jobs/{job['id']}").json()["name"] == "模拟 — ünïcødé 🚀"
+        assert "gummi-ß" in alice.get(f"/v1/jobs/{job['id']}/scene").json()["materials"]
+    finally:
+        alice.post(f"/v1/jobs/{job['id']}/cancel")

@@ -1,0 +1,187 @@
+"""Restart checkpoints: a run stopped or crashed mid-way and resumed writes the same
+result file as a run that was never interrupted.
+
+The solver draws no random numbers and its kernels are serial, so a resumed run
+performs the same floating-point operations in the same order on the same bits as
+the uninterrupted one: the frames and time series must be equal bit for bit. Any
+difference means some state was left out of the checkpoint (so the tests compare
+with exact equality, not a tolerance)."""
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import pytest
+
+from solver import run, runner
+from solver.checkpoint import CHECKPOINT_FILE, CheckpointError
+from solver.results import list_frames
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from same_result import assert_same_result  # noqa: E402
+
+
+def column(**output):
+    """Gravity, a stick floor (boundary work), an adaptive time step and a
+    body-force expression of the reference position (Particles.X is carried)."""
+    return {
+        "version": 1, "name": "column", "dimension": 2,
+        "grid": {"lower": [0.0, 0.0], "upper": [0.6, 0.6], "cell_size": 0.05},
+        "materials": {"m": {"model": "neo_hookean", "density": 1000.0, "youngs_modulus": 2.0e4,
+                            "poisson_ratio": 0.3}},
+        "bodies": [{"name": "b", "material": "m", "particles_per_cell": 2,
+                    "geometry": {"type": "box", "lower": [0.2, 0.0], "upper": [0.4, 0.3]},
+                    "initial_velocity": [0.1, 0.0]}],
+        "boundary_conditions": [{"type": "wall", "face": "y-", "mode": "stick"}],
+        "gravity": [0.0, -9.81],
+        "body_force": ["0.5 * X * sin(20 * t)", "0"],
+        "method": {"transfer": "flip", "flip_ratio": 0.99},
+        "time": {"end": 0.5, "dt": None, "cfl": 0.4},
+        "output": {"frames": 7, "fields": ["position", "velocity", "stress", "von_mises"],
+                   "energies": 3, **output},
+    }
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The uninterrupted run."""
+    out = tmp_path_factory.mktemp("reference")
+    result = run(column(), out)
+    assert result.status == "complete"
+    assert not (out / CHECKPOINT_FILE).exists()  # a finished run leaves none behind
+    return result
+
+
+def stop_after(calls: int):
+    count = 0
+
+    def should_stop() -> bool:
+        nonlocal count
+        count += 1
+        return count > calls
+    return should_stop
+
+
+def test_a_run_stopped_and_resumed_writes_the_same_result(reference, tmp_path, monkeypatch):
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)  # poll should_stop every step
+    stopped = run(column(), tmp_path, should_stop=stop_after(41))
+    assert (stopped.status, stopped.reason) == ("partial", "cancelled")
+    assert 0 < stopped.steps < reference.steps
+    assert (tmp_path / CHECKPOINT_FILE).exists()
+
+    resumed = run(column(), tmp_path, resume=True)
+    assert (resumed.status, resumed.steps) == ("complete", reference.steps)
+    assert_same_result(reference.result_path, resumed.result_path)
+    assert not (tmp_path / CHECKPOINT_FILE).exists()
+
+
+def test_a_run_stopped_twice_resumes_twice(reference, tmp_path, monkeypatch):
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    run(column(), tmp_path, should_stop=stop_after(17))
+    second = run(column(), tmp_path, should_stop=stop_after(30), resume=True)
+    assert second.reason == "cancelled"
+    run(column(), tmp_path, resume=True)
+    assert_same_result(reference.result_path, tmp_path / "result.h5")
+
+
+class Crash(Exception):
+    pass
+
+
+def test_a_crash_resumes_from_the_last_periodic_checkpoint(reference, tmp_path, monkeypatch):
+    """A crash writes nothing more: the run goes on from the checkpoint of `every_steps`,
+    redoing the steps after it, and frames written after it are dropped and written again."""
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    scene = column(checkpoint={"every_steps": 25})
+
+    def crash_at_step_60(info):
+        if info.step >= 60:
+            raise Crash
+
+    with pytest.raises(Crash):
+        run(scene, tmp_path, progress=crash_at_step_60)
+    with h5py.File(tmp_path / CHECKPOINT_FILE, "r") as h5:
+        assert h5.attrs["step"] == 50
+    frames_before = len(list_frames(tmp_path / "result.h5"))
+
+    resumed = run(scene, tmp_path, resume=True)
+    assert frames_before > 0 and resumed.status == "complete"
+    uninterrupted = run(scene, tmp_path / "uninterrupted")
+    assert_same_result(uninterrupted.result_path, resumed.result_path)
+
+
+def test_sigterm_writes_a_checkpoint_and_mpm_run_resume_finishes_the_run(reference, tmp_path):
+    """`mpm run` in its own process, stopped by SIGTERM, continued by `mpm run --resume DIR`
+    (the scene read back from the checkpoint)."""
+    import json
+    scene_file = tmp_path / "scene.json"
+    # long enough to be stopped mid-way: the same column for more time
+    longer = column()
+    longer["time"]["end"] = 1.0
+    scene_file.write_text(json.dumps(longer))
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "solver", "run", str(scene_file), "-o", str(out), "--progress", "json"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, text=True)
+    for line in process.stdout:  # wait until it is stepping
+        if json.loads(line).get("step", 0) > 0:
+            break
+    process.send_signal(signal.SIGTERM)
+    process.communicate(timeout=60)
+    assert process.returncode == 3  # partial: cancelled
+    assert (out / CHECKPOINT_FILE).exists()
+
+    done = subprocess.run([sys.executable, "-m", "solver", "run", "--resume", str(out), "--progress", "none"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    uninterrupted = run(longer, tmp_path / "uninterrupted")
+    assert_same_result(uninterrupted.result_path, out / "result.h5")
+
+
+def test_resume_refuses_a_checkpoint_of_another_scene(tmp_path, monkeypatch):
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    run(column(), tmp_path, should_stop=stop_after(5))
+    other = column()
+    other["gravity"] = [0.0, -1.0]
+    with pytest.raises(CheckpointError, match="another scene"):
+        run(other, tmp_path, resume=True)
+
+
+def test_resume_without_a_checkpoint_starts_from_the_beginning(reference, tmp_path):
+    result = run(column(), tmp_path, resume=True)
+    assert_same_result(reference.result_path, result.result_path)
+
+
+def test_an_unreadable_result_file_makes_the_resume_start_again(reference, tmp_path, monkeypatch):
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    run(column(), tmp_path, should_stop=stop_after(41))
+    (tmp_path / "result.h5").write_bytes(b"not hdf5")
+    result = run(column(), tmp_path, resume=True)
+    assert_same_result(reference.result_path, result.result_path)
+
+
+def test_the_checkpoint_interval_is_validated():
+    from solver.scene import SceneError, load_scene
+    with pytest.raises(SceneError) as error:
+        load_scene(column(checkpoint={}))
+    assert error.value.errors[0]["path"] == "output.checkpoint"
+    with pytest.raises(SceneError) as error:
+        load_scene(column(checkpoint={"every_steps": 0}))
+    assert error.value.errors[0]["path"] == "output.checkpoint.every_steps"
+
+
+def test_the_checkpoint_replaces_the_previous_one_atomically(tmp_path, monkeypatch):
+    """Written to a temporary file and renamed: the folder never holds a half-written one."""
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    replaced = []
+    real_replace = os.replace
+
+    def spy(src, dst):
+        replaced.append((os.path.basename(src), os.path.basename(dst)))
+        real_replace(src, dst)
+    monkeypatch.setattr(os, "replace", spy)
+    run(column(checkpoint={"every_steps": 40}), tmp_path, should_stop=stop_after(90))
+    saves = [pair for pair in replaced if pair[1] == CHECKPOINT_FILE]
+    assert len(saves) == 3  # steps 40 and 80, and where it stopped
+    assert all(src.startswith(".") and src.endswith(".tmp") for src, _ in saves)
