@@ -10,7 +10,7 @@ FORMULATIONS = frozenset({"ulmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
 SHAPE_FUNCTIONS = frozenset({"linear"})
 TRANSFERS = frozenset({"flip", "pic"})
-MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean"})
+MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "j2_plasticity", "johnson_cook"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})
 WALL_MODES = frozenset({"stick", "slip"})
@@ -21,4 +21,5 @@ MAX_PROCESSES = 1
 OUTPUT_FIELDS = frozenset({
     "position", "velocity", "stress", "mass", "volume", "density", "pressure",
     "velocity_magnitude", "von_mises", "deformation_gradient", "strain_energy_density",
+    "plastic_strain", "damage", "temperature",
 })

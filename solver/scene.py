@@ -286,6 +286,14 @@ class JohnsonCookDamage(_Model):
     D3: Real
     D4: Real
     D5: Real
+    evolution_factor: Positive = 10.0  # D = k (D_init - 1): 10 in [K] eq. 2.16, 1 in [R] Alg. 13
+
+
+class Failure(_Model):
+    """MPM3DMP 5.3: a particle fails when either criterion given is met."""
+
+    plastic_strain: Positive | None = None  # equivalent plastic strain at failure
+    min_pressure: Annotated[float, Strict(), Field(lt=0)] | None = None  # failure pressure (a tension, < 0)
 
 
 class JohnsonCook(_ElasticMaterial):
@@ -302,6 +310,12 @@ class JohnsonCook(_ElasticMaterial):
     taylor_quinney: Annotated[float, Strict(), Field(ge=0, le=1)]
     eos: Annotated[Union[LinearEOS, MieGruneisenEOS], Field(discriminator="model")] = LinearEOS(model="linear")
     damage: JohnsonCookDamage | None = None
+    failure: Failure | None = None
+
+    def dilatational_wave_speed(self) -> float:
+        """sqrt((K + 4/3 G) / rho) with the EOS bulk modulus (rho0 c0^2 for Mie-Gruneisen)."""
+        bulk = self.density * self.eos.c0**2 if self.eos.model == "mie_gruneisen" else self.bulk_modulus
+        return math.sqrt((bulk + 4 * self.shear_modulus / 3) / self.density)
 
     @field_validator("melt_temperature")
     @classmethod

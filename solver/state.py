@@ -181,5 +181,7 @@ def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
     return particles, slices
 
 
-def make_materials(scene, slices: dict[str, slice]) -> list[tuple[object, slice]]:
-    return [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
+def make_materials(scene, slices: dict[str, slice], particles: Particles) -> list[tuple[object, slice]]:
+    models = [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
+    materials.init_particles(models, particles, scene)
+    return models

@@ -49,7 +49,7 @@ class ExplicitMPM:
         self.scene = scene
         method = scene.method
         self.particles, slices = make_particles(scene)
-        self.materials = make_materials(scene, slices)
+        self.materials = make_materials(scene, slices, self.particles)
         self.grid = make_grid(scene)
         self.shape = shape.get(method.shape_function)
         self.stencil = make_stencil(self.particles.count, scene.dimension, self.shape.SUPPORT)
@@ -60,7 +60,6 @@ class ExplicitMPM:
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.particles.mass.min()) if self.particles.count else 0.0
-        self.wave_speed = max(m.wave_speed for m, _ in self.materials) if self.materials else 0.0
         self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
         self.time = 0.0
         self.step_count = 0
@@ -157,6 +156,11 @@ class ExplicitMPM:
         raise Instability(self.step_count + 1, self.time, int(self.particles.id[index]), quantity, detail)
 
     # -- diagnostics ------------------------------------------------------------
+
+    @property
+    def wave_speed(self) -> float:
+        """The fastest material wave speed now (it can change with the state, e.g. an EOS)."""
+        return max((m.wave_speed for m, _ in self.materials), default=0.0)
 
     def stable_time_step(self, cfl: float) -> float:
         """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73)."""

@@ -7,17 +7,26 @@ stress. Each model is one module with a class offering:
     .wave_speed                          dilatational wave speed for the time step
     .update_stress(particles, sl, dt)    sl: slice of the particles made of it
     .particle_strain_energy(particles, sl)  stored energy of each of those particles
+    .init_particles(particles, sl, scene)   optional: allocate the per-particle state
+                                         the model needs (particles.require)
+
+`wave_speed` may change from step to step (an EOS stiffens under compression);
+the time step reads its current value.
 
 Particles are sorted by material, so each model works on one contiguous slice.
 """
 from __future__ import annotations
 
+from solver.materials.j2_plasticity import J2Plasticity
+from solver.materials.johnson_cook import JohnsonCook
 from solver.materials.linear_elastic import LinearElastic
 from solver.materials.neo_hookean import NeoHookean
 
 REGISTRY = {
     "linear_elastic": LinearElastic,
     "neo_hookean": NeoHookean,
+    "j2_plasticity": J2Plasticity,
+    "johnson_cook": JohnsonCook,
 }
 
 
@@ -29,3 +38,9 @@ def create(config, dimension: int):
     return model(config, dimension)
 
 
+def init_particles(models, particles, scene) -> None:
+    """Let each model allocate the per-particle state it needs."""
+    for model, sl in models:
+        init = getattr(model, "init_particles", None)
+        if init is not None:
+            init(particles, sl, scene)
