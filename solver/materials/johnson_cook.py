@@ -7,13 +7,15 @@ Per particle and step (stress sigma = s - p I, p positive in compression):
    rate (solver/materials/objective.py; the review's polar decomposition is the
    alternative it names);
 2. elastic trial deviator: s_trial = s + 2 G' dt dev(D), G' = (1 - D) G;
-3. radial return on the flow stress at the start of the step (Leroch et al.,
-   review Algorithm 12, the flow stress is held fixed during the return):
+3. radial return (Leroch et al., review Algorithm 12) on the flow stress
        sigma_f = (A + B eps_p^n) (1 + C ln(max(eps_dot_p / eps_dot_0, 1))) (1 - T*^m) (1 - D),
-       T* = (T - T_room) / (T_melt - T_room) clamped to [0, 1];
-   if q_trial = sqrt(3/2 s:s) > sigma_f: d eps_p = (q_trial - sigma_f) / (3 G'),
-   s <- s_trial sigma_f / q_trial. The plastic strain rate in the next step's
-   flow stress is d eps_p / dt of this one (VERIFICATION_CASES F34);
+       T* = (T - T_room) / (T_melt - T_room) clamped to [0, 1],
+   with eps_p, T and D of the start of the step; if q_trial = sqrt(3/2 s:s) > sigma_f,
+   d eps_p solves q_trial - 3 G' d eps_p = sigma_f(eps_dot_p = d eps_p / dt) and
+   s <- s_trial sigma_f / q_trial. The rate is this step's plastic rate, solved for
+   (VERIFICATION_CASES F34 leaves it open): the previous step's rate, as Karamelo
+   uses, makes the return alternate between yielding twice as fast and not at all
+   once C ln(rate) is larger than the hardening of one step;
 4. adiabatic heating: dT = taylor_quinney sigma_f d eps_p / (rho c_p) (eq. 2.13);
 5. pressure from the EOS (solver/materials/eos.py) at rho = mass / volume and
    e = rho0 c_p (T - T_room) (one specific heat serves as c_p and c_v); a tension
@@ -57,6 +59,35 @@ def flow_stress(prm, eps_p, rate_ratio, t_star):
 
 
 @njit(cache=True)
+def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor):
+    """d eps_p of the radial return with the strain-rate term taken at this step's rate:
+
+        q_trial - 3 G' d = sigma_static (1 + C ln(max(d / rate_floor, 1))),  rate_floor = eps_dot_0 dt,
+
+    sigma_static the flow stress without its rate factor. The left side falls and
+    the right side rises with d, so the root is unique; safeguarded Newton finds it.
+    """
+    d = (q_trial - sigma_static) / three_g           # the root without the rate term, an upper bound
+    if C == 0.0 or d <= rate_floor:
+        return d
+    lo, hi, x = rate_floor, d, d
+    for _ in range(60):
+        g = q_trial - three_g * x - sigma_static * (1.0 + C * math.log(x / rate_floor))
+        if g > 0.0:
+            lo = x
+        else:
+            hi = x
+        step = g / (three_g + sigma_static * C / x)
+        nxt = x + step
+        if not lo < nxt < hi:
+            nxt = 0.5 * (lo + hi)
+        if abs(nxt - x) <= 1e-15 * x:
+            return nxt
+        x = nxt
+    return x
+
+
+@njit(cache=True)
 def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm):
     """Update the particles' stress and state; returns the largest wave speed (K_t + 4/3 G') / rho."""
     D = np.empty((3, 3))
@@ -78,12 +109,13 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm
         objective.add_deviatoric_rate(s, D, 2.0 * g * dt)
         q = objective.von_mises(s)
         t_star = homologous_temperature(prm, T[p])
-        sigma_f = flow_stress(prm, eps_p[p], eps_rate[p] / prm[RATE0], t_star) * (1.0 - d)
+        sigma_f = flow_stress(prm, eps_p[p], 1.0, t_star) * (1.0 - d)   # static: rate factor 1
         d_eps = 0.0
         if d >= 1.0:
             s[:, :] = 0.0
         elif q > sigma_f:
-            d_eps = (q - sigma_f) / (3.0 * g)
+            d_eps = plastic_increment(q, 3.0 * g, sigma_f, prm[C], prm[RATE0] * dt)
+            sigma_f = q - 3.0 * g * d_eps
             s *= sigma_f / q
         eps_p[p] += d_eps
         eps_rate[p] = d_eps / dt
