@@ -94,32 +94,43 @@ def uniaxial_strain_exact(eps):
     return (K + 4 * G / 3) * eps_y + (K + 4 * G * H / (3 * (3 * G + H))) * (eps - eps_y)
 
 
-@pytest.mark.parametrize("dim", [1, 2, 3])
-def test_j2_uniaxial_strain_curve(dim):
+def j2_uniaxial_strain(dim, rate=1.0, dt=2e-5, steps=300):
+    """Strain to 6e-3 (~4 x the yield strain 1.6e-3): (eps, sigma_xx, sigma_yy, sigma_zz) per step, final eps_p."""
     point = MaterialPoint(J2, dim)
-    rate, dt, steps = 1.0, 2e-5, 300             # to eps = 6e-3, ~5 x the yield strain 1.6e-3
     L = np.zeros((dim, dim))
     L[0, 0] = rate
+    rows = []
     for n in range(1, steps + 1):
         point.step(L, dt)
-        eps = rate * dt * n
-        expected = uniaxial_strain_exact(eps)
-        assert point.stress[0, 0] == pytest.approx(expected, rel=ROUND_OFF, abs=ROUND_OFF * SY)
-        # lateral stresses: sigma_xx - q (the von Mises stress is sigma_xx - sigma_yy)
-        assert point.stress[1, 1] == pytest.approx(point.stress[2, 2], rel=ROUND_OFF, abs=ROUND_OFF * SY)
-    eps_y = SY / (2 * G)
-    # plastic strain: q = SY + H eps_p and q = 2 G (eps - eps_p) in the plastic range
-    assert point.state("plastic_strain") == pytest.approx(2 * G * (eps - eps_y) / (3 * G + H), rel=1e-9)
+        rows.append((rate * dt * n, point.stress[0, 0], point.stress[1, 1], point.stress[2, 2]))
+    return np.array(rows), point.state("plastic_strain")
+
+
+def j2_uniaxial_strain_error(dim):
+    """max |sigma_xx - exact| / yield_stress over the path."""
+    path, _ = j2_uniaxial_strain(dim)
+    return max(abs(s - uniaxial_strain_exact(eps)) for eps, s, _, _ in path) / SY
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_j2_uniaxial_strain_curve(dim):
+    path, eps_p = j2_uniaxial_strain(dim)
+    for eps, sxx, syy, szz in path:
+        assert sxx == pytest.approx(uniaxial_strain_exact(eps), rel=ROUND_OFF, abs=ROUND_OFF * SY)
+        assert syy == pytest.approx(szz, rel=ROUND_OFF, abs=ROUND_OFF * SY)   # lateral symmetry (plane strain too)
+    eps = path[-1, 0]
+    # plastic strain: q = SY + H eps_p and q = 2 G eps - 3 G eps_p in the plastic range
+    assert eps_p == pytest.approx((2 * G * eps - SY) / (3 * G + H), rel=1e-9)
 
 
 # -- J2: uniaxial stress ----------------------------------------------------------
 
-def test_j2_uniaxial_stress_yield_point_and_tangent_modulus():
+def j2_uniaxial_stress(rate=1.0, dt=2e-5, steps=200):
+    """Stretch to 4e-3 (~3 x the yield strain 1.25e-3) with the lateral rate solved so that
+    sigma_yy = sigma_zz = 0: (eps, sigma_xx, sigma_zz) per step and the last lateral rate."""
     point = MaterialPoint(J2, 3)
-    rate, dt, steps = 1.0, 2e-5, 200              # to eps = 4e-3, ~3 x the yield strain 1.25e-3
     lateral = -NU * rate
-    eps_y = SY / E
-    E_t = E * H / (E + H)
+    rows = []
     for n in range(1, steps + 1):
         snap = point.snapshot()
 
@@ -136,12 +147,29 @@ def test_j2_uniaxial_stress_yield_point_and_tangent_modulus():
             l0, l1, r0 = l1, l1 - r1 * (l1 - l0) / (r1 - r0), r1
             r1 = residual(l1)
         lateral = l1
-        eps = rate * dt * n
-        expected = E * eps if eps <= eps_y else SY + E_t * (eps - eps_y)
-        assert point.stress[0, 0] == pytest.approx(expected, rel=1e-9)
-        assert abs(point.stress[2, 2]) < 1e-9 * SY
+        rows.append((rate * dt * n, point.stress[0, 0], point.stress[2, 2]))
+    return np.array(rows), lateral / rate
+
+
+def uniaxial_stress_exact(eps):
+    """E up to the yield point (SY / E, SY), then the tangent modulus E_t = E H / (E + H)."""
+    eps_y = SY / E
+    return E * eps if eps <= eps_y else SY + E * H / (E + H) * (eps - eps_y)
+
+
+def j2_uniaxial_stress_error():
+    path, _ = j2_uniaxial_stress()
+    return max(abs(s - uniaxial_stress_exact(eps)) for eps, s, _ in path) / SY
+
+
+def test_j2_uniaxial_stress_yield_point_and_tangent_modulus():
+    path, lateral = j2_uniaxial_stress()
+    for eps, sxx, szz in path:
+        assert sxx == pytest.approx(uniaxial_stress_exact(eps), rel=1e-9)
+        assert abs(szz) < 1e-9 * SY
     # past the yield point the lateral contraction tends to the plastic (isochoric) 1/2
-    assert -lateral / rate == pytest.approx(0.5 - (0.5 - NU) * E_t / E, rel=1e-6)
+    E_t = E * H / (E + H)
+    assert -lateral == pytest.approx(0.5 - (0.5 - NU) * E_t / E, rel=1e-6)
 
 
 # -- Johnson-Cook flow stress ---------------------------------------------------
@@ -152,6 +180,24 @@ def jc_flow_stress(eps_p, rate, T):
     t_star = (T - c["room_temperature"]) / (c["melt_temperature"] - c["room_temperature"])
     return ((c["A"] + c["B"] * eps_p ** c["n"]) * (1 + c["C"] * math.log(max(rate / c["reference_strain_rate"], 1.0)))
             * (1 - t_star ** c["m"]))
+
+
+def jc_shear(rate, temperature, steps=2000):
+    """Isochoric pure shear to an equivalent strain of 0.1 at the equivalent rate `rate`,
+    heating off (T fixed): (von Mises stress, eps_p, T) at the end."""
+    point = MaterialPoint({**CU, "eos": MG}, 3, temperature=temperature, rigid_volume=True)
+    a = rate * math.sqrt(3) / 2                   # D = a (e1 e2 + e2 e1): sqrt(2/3 D:D) = rate
+    L = np.zeros((3, 3))
+    L[0, 1] = L[1, 0] = a
+    dt = 0.1 / rate / steps
+    for _ in range(steps):
+        point.step(L, dt)
+    return von_mises(point.stress), point.state("plastic_strain"), point.state("temperature")
+
+
+def jc_flow_stress_error(rate, temperature):
+    q, eps_p, _ = jc_shear(rate, temperature)
+    return abs(q / jc_flow_stress(eps_p, rate, temperature) - 1)
 
 
 @pytest.mark.parametrize("rate", [0.2, 1e3, 1e5])
@@ -166,18 +212,10 @@ def test_johnson_cook_flow_stress_at_rates_and_temperatures(rate, temperature):
     d eps_p = 5e-5: <= 2e-4 / (sigma_f / 1e8)) and by C h / (3G) (the elastic
     part of the rate: <= 0.013 x 1.2e9 / 1.3e11 = 1.2e-4): 1e-3 covers both.
     """
-    point = MaterialPoint({**CU, "eos": MG}, 3, temperature=temperature, rigid_volume=True)   # shear is isochoric
-    a = rate * math.sqrt(3) / 2                   # D = a (e1 e2 + e2 e1): sqrt(2/3 D:D) = rate
-    L = np.zeros((3, 3))
-    L[0, 1] = L[1, 0] = a
-    steps = 2000
-    dt = 0.1 / rate / steps                       # to an equivalent strain of 0.1
-    for _ in range(steps):
-        point.step(L, dt)
-    eps_p = point.state("plastic_strain")
+    q, eps_p, T = jc_shear(rate, temperature)
     assert eps_p > 0.09                           # yielded early (yield strain ~ 1e-3)
-    assert point.state("temperature") == temperature
-    assert von_mises(point.stress) == pytest.approx(jc_flow_stress(eps_p, rate, temperature), rel=1e-3)
+    assert T == temperature
+    assert q == pytest.approx(jc_flow_stress(eps_p, rate, temperature), rel=1e-3)
 
 
 def test_johnson_cook_melted_material_carries_no_shear():
@@ -200,21 +238,36 @@ def mie_gruneisen(mu, e):
     return rho0c2 * mu + MG["gamma0"] * e
 
 
+def mie_gruneisen_path(direction, temperature=500.0, steps=40):
+    """Isotropic compression (-1) to mu = 0.13 or expansion (+1) to mu = -0.11, 0.3 % volume per step:
+    (mu from det F, pressure, von Mises) per step. Above room temperature the gamma0 e term counts."""
+    point = MaterialPoint({**CU, "eos": MG}, 3, temperature=temperature)
+    rows = []
+    for _ in range(steps):
+        point.step(direction * 1e3 * np.eye(3), 1e-6)
+        mu = 1.0 / np.linalg.det(point.p.F[0]) - 1.0   # rho / rho0 from the kinematics
+        rows.append((mu, -np.trace(point.stress) / 3, von_mises(point.stress)))
+    return np.array(rows)
+
+
+def thermal_energy(temperature):
+    return CU["density"] * CU["specific_heat"] * (temperature - CU["room_temperature"])
+
+
+def mie_gruneisen_error(direction):
+    """max |p - EOS| / |EOS| over the path."""
+    e = thermal_energy(500.0)
+    return max(abs(p / mie_gruneisen(mu, e) - 1) for mu, p, _ in mie_gruneisen_path(direction))
+
+
 @pytest.mark.parametrize("direction", [-1.0, 1.0], ids=["compression", "tension"])
 def test_mie_gruneisen_pressure(direction):
-    """Isotropic compression to 12 % and expansion (no shear): p = EOS(rho / rho0 - 1, e) at every step."""
-    T = 500.0                                      # above room: the gamma0 e term counts
-    e = CU["density"] * CU["specific_heat"] * (T - CU["room_temperature"])
-    point = MaterialPoint({**CU, "eos": MG}, 3, temperature=T)
-    dt, steps = 1e-6, 40
-    L = direction * 1e3 * np.eye(3)               # 0.3 % volume change per step
-    for _ in range(steps):
-        point.step(L, dt)
-        mu = 1.0 / np.linalg.det(point.p.F[0]) - 1.0   # rho / rho0 from the kinematics
-        p = -np.trace(point.stress) / 3
+    e = thermal_energy(500.0)
+    path = mie_gruneisen_path(direction)
+    for mu, p, q in path:
         assert p == pytest.approx(mie_gruneisen(mu, e), rel=1e-12)
-        assert von_mises(point.stress) < 1e-9 * abs(p)
-    assert (mu > 0.12) if direction < 0 else (mu < -0.11)
+        assert q < 1e-9 * abs(p)
+    assert (path[-1, 0] > 0.12) if direction < 0 else (path[-1, 0] < -0.11)
 
 
 def test_linear_eos_pressure():
@@ -265,6 +318,32 @@ def test_failure_by_minimum_pressure_drops_shear_and_tension():
 
 # -- adiabatic heating ------------------------------------------------------------
 
+HEATING = {**CU, "A": 1e9, "B": 0.0, "C": 0.0, "m": 1.0, "taylor_quinney": 0.9, "eos": {"model": "linear"}}
+
+
+def adiabatic_heating():
+    """Isochoric shear to an equivalent strain of 0.5, 1e-4 per step: the relative errors of
+    T - T_r against the closed form and of the heat against chi x the plastic work."""
+    cfg = HEATING
+    point = MaterialPoint(cfg, 3, rigid_volume=True)
+    rho, c, chi = cfg["density"], cfg["specific_heat"], cfg["taylor_quinney"]
+    Tr, Tm = cfg["room_temperature"], cfg["melt_temperature"]
+    L = np.zeros((3, 3))
+    L[0, 1] = L[1, 0] = math.sqrt(3) / 2 * 1e3
+    dt, steps = 1e-7, 5000
+    work = 0.0
+    for _ in range(steps):
+        before = point.stress.copy()
+        point.step(L, dt)
+        work += np.sum(0.5 * (before + point.stress) * L) * dt * point.p.volume[0]
+    eps_p, T = point.state("plastic_strain"), point.state("temperature")
+    k = chi * cfg["A"] / (rho * c * (Tm - Tr))
+    closed_form = (T - Tr) / ((Tm - Tr) * (1 - math.exp(-k * eps_p))) - 1
+    stored = float(point.model.particle_strain_energy(point.p, slice(0, 1))[0])
+    heat = rho * c * (T - Tr) * point.p.volume[0]
+    return closed_form, heat / (chi * (work - stored)) - 1, eps_p
+
+
 def test_plastic_work_heats_the_material():
     """Perfectly plastic (B = C = 0), linear thermal softening (m = 1), Taylor-Quinney chi = 0.9.
 
@@ -278,34 +357,43 @@ def test_plastic_work_heats_the_material():
     heat takes the flow stress at the start of each step, the work the midpoint
     stress, the same k d / 2 apart.
     """
-    cfg = {**CU, "A": 1e9, "B": 0.0, "C": 0.0, "m": 1.0, "taylor_quinney": 0.9, "eos": {"model": "linear"}}
-    point = MaterialPoint(cfg, 3, rigid_volume=True)
-    rho, c, chi = cfg["density"], cfg["specific_heat"], cfg["taylor_quinney"]
-    Tr, Tm = cfg["room_temperature"], cfg["melt_temperature"]
-    a = math.sqrt(3) / 2 * 1e3
-    L = np.zeros((3, 3))
-    L[0, 1] = L[1, 0] = a
-    dt, steps = 1e-7, 5000                        # equivalent strain 0.5, 1e-4 per step
-    work = 0.0
-    for _ in range(steps):
-        before = point.stress.copy()
-        point.step(L, dt)
-        work += np.sum(0.5 * (before + point.stress) * L) * dt * point.p.volume[0]
-    eps_p, T = point.state("plastic_strain"), point.state("temperature")
-    k = chi * cfg["A"] / (rho * c * (Tm - Tr))
-    assert T - Tr == pytest.approx((Tm - Tr) * (1 - math.exp(-k * eps_p)), rel=1e-4)
-    # energy balance: rho c dT V = chi (work - stored elastic energy)
-    stored = float(point.model.particle_strain_energy(point.p, slice(0, 1))[0])
-    heat = rho * c * (T - Tr) * point.p.volume[0]
-    assert heat == pytest.approx(chi * (work - stored), rel=1e-4)
+    closed_form, balance, eps_p = adiabatic_heating()
+    assert eps_p > 0.45
+    assert abs(closed_form) < 1e-4
+    assert abs(balance) < 1e-4
 
 
 # -- objectivity ------------------------------------------------------------------
 
+def rigid_rotation(config, steps=1000):
+    """Load plastically, then spin by 90 degrees about z (L = W): the stress before and
+    after, the rotated one expected, and the plastic strain before and after."""
+    point = MaterialPoint(config, 3)
+    for _ in range(100):                           # past yield in both models
+        point.step(np.diag([1.0, -0.2, -0.2]) * 1e2, 1e-6)
+    point.rigid_volume = True                      # a rigid motion keeps the volume
+    sigma0, eps_p0 = point.stress.copy(), point.state("plastic_strain")
+    w = math.pi / 2 / (steps * 1e-6)
+    W = np.array([[0.0, -w, 0.0], [w, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    for _ in range(steps):
+        point.step(W, 1e-6)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    return sigma0, point.stress.copy(), R @ sigma0 @ R.T, eps_p0, point.state("plastic_strain")
+
+
+def rigid_rotation_error(config):
+    """max |sigma - R sigma0 R^T| / max |sigma0|."""
+    sigma0, sigma, expected, _, _ = rigid_rotation(config)
+    return np.abs(sigma - expected).max() / np.abs(sigma0).max()
+
+
+ROTATING = {"j2": J2, "johnson_cook": {**CU, "C": 0.0, "eos": MG}}
+
+
 # C = 0: with a rate term the flow stress would drop once the stretching stops, and
 # the overstress relax by plastic flow during the spin (the model's viscoplasticity).
-@pytest.mark.parametrize("config", [J2, {**CU, "C": 0.0, "eos": MG}], ids=["j2", "johnson_cook"])
-def test_rigid_rotation_rotates_the_stress_and_creates_none(config):
+@pytest.mark.parametrize("name", ROTATING)
+def test_rigid_rotation_rotates_the_stress_and_creates_none(name):
     """Load plastically, then spin rigidly (L = W) by 90 degrees about z.
 
     The stress must turn with the body, sigma = R sigma0 R^T, and nothing else
@@ -314,25 +402,12 @@ def test_rigid_rotation_rotates_the_stress_and_creates_none(config):
     theta (w dt)^2 / 12 = 3.2e-7 rad for 1000 steps, an error of at most
     2 x 3.2e-7 |sigma| in the components; 1e-6 |sigma| bounds it.
     """
-    point = MaterialPoint(config, 3)
-    stretch = np.diag([1.0, -0.2, -0.2]) * 1e2
-    for _ in range(100):                           # past yield in both models
-        point.step(stretch, 1e-6)
-    point.rigid_volume = True
-    sigma0 = point.stress.copy()
-    eps_p0 = point.state("plastic_strain")
+    sigma0, sigma, expected, eps_p0, eps_p = rigid_rotation(ROTATING[name])
     assert eps_p0 > 0
-    steps, theta = 1000, math.pi / 2
-    w = theta / (steps * 1e-6)
-    W = np.array([[0.0, -w, 0.0], [w, 0.0, 0.0], [0.0, 0.0, 0.0]])
-    for _ in range(steps):
-        point.step(W, 1e-6)
-    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    scale = np.abs(sigma0).max()
-    np.testing.assert_allclose(point.stress, R @ sigma0 @ R.T, atol=1e-6 * scale)
-    assert von_mises(point.stress) == pytest.approx(von_mises(sigma0), rel=1e-12)
-    assert np.trace(point.stress) == pytest.approx(np.trace(sigma0), rel=1e-12)
-    assert point.state("plastic_strain") == pytest.approx(eps_p0, rel=1e-12)   # on the yield surface: round-off may flow
+    np.testing.assert_allclose(sigma, expected, atol=1e-6 * np.abs(sigma0).max())
+    assert von_mises(sigma) == pytest.approx(von_mises(sigma0), rel=1e-12)
+    assert np.trace(sigma) == pytest.approx(np.trace(sigma0), rel=1e-12)
+    assert eps_p == pytest.approx(eps_p0, rel=1e-12)   # on the yield surface: round-off may flow
 
 
 def test_spin_alone_creates_no_stress():
