@@ -28,7 +28,8 @@ Per particle and step (stress sigma = s - p I, p positive in compression):
 Per-particle state: plastic_strain, plastic_strain_rate, temperature (the body's
 initial_temperature, else room_temperature), and damage (+ damage_init) only when
 the material has a damage model or a failure criterion.
-The stored energy is the elastic part: s:s / (4 G') + p^2 / (2 K) per unit volume.
+The stored energy is the elastic part: s:s / (4 G') per unit volume plus the
+work of the EOS's cold pressure (eos.stored_energy).
 """
 from __future__ import annotations
 
@@ -59,18 +60,20 @@ def flow_stress(prm, eps_p, rate_ratio, t_star):
 
 
 @njit(cache=True)
-def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor):
+def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor, guess):
     """d eps_p of the radial return with the strain-rate term taken at this step's rate:
 
         q_trial - 3 G' d = sigma_static (1 + C ln(max(d / rate_floor, 1))),  rate_floor = eps_dot_0 dt,
 
     sigma_static the flow stress without its rate factor. The left side falls and
-    the right side rises with d, so the root is unique; safeguarded Newton finds it.
+    the right side rises with d, so the root is unique; safeguarded Newton finds it,
+    starting from `guess` (the last step's increment: in steady flow a step or two away).
     """
     d = (q_trial - sigma_static) / three_g           # the root without the rate term, an upper bound
     if C == 0.0 or d <= rate_floor:
         return d
-    lo, hi, x = rate_floor, d, d
+    lo, hi = rate_floor, d
+    x = guess if lo < guess < hi else d
     for _ in range(60):
         g = q_trial - three_g * x - sigma_static * (1.0 + C * math.log(x / rate_floor))
         if g > 0.0:
@@ -81,7 +84,7 @@ def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor):
         nxt = x + step
         if not lo < nxt < hi:
             nxt = 0.5 * (lo + hi)
-        if abs(nxt - x) <= 1e-15 * x:
+        if abs(nxt - x) <= 1e-13 * x:
             return nxt
         x = nxt
     return x
@@ -114,7 +117,7 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm
         if d >= 1.0:
             s[:, :] = 0.0
         elif q > sigma_f:
-            d_eps = plastic_increment(q, 3.0 * g, sigma_f, prm[C], prm[RATE0] * dt)
+            d_eps = plastic_increment(q, 3.0 * g, sigma_f, prm[C], prm[RATE0] * dt, eps_rate[p] * dt)
             sigma_f = q - 3.0 * g * d_eps
             s *= sigma_f / q
         eps_p[p] += d_eps
@@ -147,17 +150,19 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm
 
 
 @njit(cache=True)
-def _energy(stress, volume, dmg, G, K, out):
+def _energy(stress, mass, volume, dmg, G, rho0, eos_prm, out):
     s = np.empty((3, 3))
     damaged = dmg.shape[0] > 0
     for p in range(stress.shape[0]):
-        pressure = objective.split(stress[p], s)
+        objective.split(stress[p], s)
         g = (1.0 - dmg[p]) * G if damaged else G
         ss = 0.0
         for a in range(3):
             for b in range(3):
                 ss += s[a, b] * s[a, b]
-        out[p] = volume[p] * ((ss / (4.0 * g) if g > 0.0 else 0.0) + pressure * pressure / (2.0 * K))
+        mu = mass[p] / (volume[p] * rho0) - 1.0
+        shear = volume[p] * ss / (4.0 * g) if g > 0.0 else 0.0
+        out[p] = shear + mass[p] / rho0 * eos.stored_energy(eos_prm, mu)
 
 
 class JohnsonCook(IsotropicElastic):
@@ -206,6 +211,6 @@ class JohnsonCook(IsotropicElastic):
 
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         out = np.empty(sl.stop - sl.start)
-        _energy(particles.stress[sl], particles.volume[sl], self._optional(particles, "damage", sl),
-                self.mu, self.bulk, out)
+        _energy(particles.stress[sl], particles.mass[sl], particles.volume[sl],
+                self._optional(particles, "damage", sl), self.mu, self.density, self.eos, out)
         return out

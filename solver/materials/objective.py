@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 
@@ -56,13 +55,12 @@ def rotate(sigma, W, dt, Q, tmp):
     Q[2, 0] = c * (w0 * w2 - w1)
     Q[1, 2] = c * (w1 * w2 - w0)
     Q[2, 1] = c * (w1 * w2 + w0)
-    tmp[:, :] = sigma
-    row = np.empty(3)
-    for a in range(3):
-        for l in range(3):   # row a of Q sigma
-            row[l] = Q[a, 0] * tmp[0, l] + Q[a, 1] * tmp[1, l] + Q[a, 2] * tmp[2, l]
+    for a in range(3):       # tmp = Q sigma
         for b in range(3):
-            sigma[a, b] = row[0] * Q[b, 0] + row[1] * Q[b, 1] + row[2] * Q[b, 2]
+            tmp[a, b] = Q[a, 0] * sigma[0, b] + Q[a, 1] * sigma[1, b] + Q[a, 2] * sigma[2, b]
+    for a in range(3):       # sigma = tmp Q^T
+        for b in range(3):
+            sigma[a, b] = tmp[a, 0] * Q[b, 0] + tmp[a, 1] * Q[b, 1] + tmp[a, 2] * Q[b, 2]
 
 
 @njit(cache=True)

@@ -270,6 +270,21 @@ def test_mie_gruneisen_pressure(direction):
     assert (path[-1, 0] > 0.12) if direction < 0 else (path[-1, 0] < -0.11)
 
 
+@pytest.mark.parametrize("eos", [MG, {"model": "linear"}], ids=["mie_gruneisen", "linear"])
+@pytest.mark.parametrize("direction", [-1.0, 1.0], ids=["compression", "tension"])
+def test_stored_energy_is_the_work_of_the_pressure(eos, direction):
+    """Isotropic compression to mu = 0.13 / expansion, no heat: the stored energy equals the
+    work -sum p dV done on the point (midpoint rule: relative error ~ (dJ)^2 = 1e-5; 1e-4)."""
+    point = MaterialPoint({**CU, "eos": eos}, 3)
+    work = 0.0
+    for _ in range(40):
+        p0, v0 = -np.trace(point.stress) / 3, point.p.volume[0]
+        point.step(direction * 1e3 * np.eye(3), 1e-6)
+        work -= 0.5 * (p0 - np.trace(point.stress) / 3) * (point.p.volume[0] - v0)
+    stored = float(point.model.particle_strain_energy(point.p, slice(0, 1))[0])
+    assert stored == pytest.approx(work, rel=1e-4)
+
+
 def test_linear_eos_pressure():
     point = MaterialPoint({**CU, "eos": {"model": "linear"}}, 3)
     K_cu = CU["youngs_modulus"] / (3 * (1 - 2 * CU["poisson_ratio"]))
