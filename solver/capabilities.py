@@ -10,11 +10,11 @@ FORMULATIONS = frozenset({"ulmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
 SHAPE_FUNCTIONS = frozenset({"linear"})
 TRANSFERS = frozenset({"flip", "pic"})
-MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "j2_plasticity", "johnson_cook"})
+MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "rigid", "j2_plasticity", "johnson_cook"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})
 WALL_MODES = frozenset({"stick", "slip"})
-AXISYMMETRIC = False
+AXISYMMETRIC = True
 MAX_PROCESSES = 1
 
 # Output fields the solver can write per particle (id, body and mass are always written).

@@ -439,7 +439,7 @@ class Body(_Model):
     initial_temperature: NonNegative | None = None
     initial_density: Positive | None = None  # ideal_gas bodies only
     initial_pressure: NonNegative | None = None  # ideal_gas bodies only
-    velocity: list[TimeValue] | None = None  # rigid bodies only; None: at rest
+    velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
 
 
 class VelocityCondition(_Model):
@@ -650,6 +650,8 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         length_ok("grid.upper", scene.grid.upper),
         length_ok("grid.cell_size", scene.grid.cell_size if isinstance(scene.grid.cell_size, list) else None),
     ])
+    if scene.axisymmetric and scene.grid.lower is not None and scene.grid.lower[0] < 0:
+        problems.append(("grid.lower[0]", "must be >= 0 in an axisymmetric scene (x is the radius r)"))
     if scene.method.formulation == "ulmpm":
         for name in ("lower", "upper"):
             if getattr(scene.grid, name) is None:
@@ -723,6 +725,9 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
         for name in ("initial_density", "initial_pressure"):
             if getattr(body, name) is not None:
                 problems.append((f"{path}.{name}", "only used with an 'ideal_gas' material"))
+    if isinstance(material, Rigid) and body.initial_velocity is not None:
+        problems.append((f"{path}.initial_velocity", "a 'rigid' body moves with its prescribed velocity; "
+                                                     "use velocity instead"))
     if body.velocity is not None:
         if not isinstance(material, Rigid):
             problems.append((f"{path}.velocity", "a prescribed velocity needs a 'rigid' material; "
@@ -734,6 +739,9 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
 
 def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:
     lower, upper = body.geometry.shape().bounding_box()
+    if scene.axisymmetric:   # the part at r < 0 is the mirror image of the cross-section: not seeded
+        lower = np.array(lower, dtype=float)
+        lower[0] = max(lower[0], 0.0)
     grid_lower, grid_upper = np.array(scene.grid_lower()), np.array(scene.grid_upper())
     tolerance = 1e-9 * max(scene.cell_sizes())
     if np.all(lower >= grid_lower - tolerance) and np.all(upper <= grid_upper + tolerance):

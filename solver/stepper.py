@@ -11,8 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from solver import kernels, shape
+from solver.axisymmetric import Axisymmetry
 from solver.boundary import Constraints
 from solver.loads import BodyLoads
+from solver.rigid import RigidBodies
 from solver.state import make_grid, make_materials, make_particles, make_stencil
 
 # Nodes whose mass is below this fraction of the lightest particle's mass get no
@@ -55,11 +57,14 @@ class ExplicitMPM:
         self.stencil = make_stencil(self.particles.count, scene.dimension, self.shape.SUPPORT)
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         self.constraints = Constraints(scene, self.grid)
+        self.axisymmetry = Axisymmetry(self.particles, self.grid) if scene.axisymmetric else None
+        self.rigid = RigidBodies(scene, self.particles, self.grid)
         self.loads = BodyLoads(scene)
         if self.loads.needs_reference:
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
-        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.particles.mass.min()) if self.particles.count else 0.0
+        masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
+        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(masses.min()) if masses.size else 0.0
         self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
         self.time = 0.0
         self.step_count = 0
@@ -72,7 +77,9 @@ class ExplicitMPM:
     def advance(self, dt: float) -> None:
         """One explicit step of size dt; raises Instability when the state breaks down."""
         self.constraints.set_time(self.time + dt)
+        self.rigid.begin_step(self.particles, self.spec, self.time + dt)
         self._step(dt)
+        self.rigid.end_step(self.particles, dt)
         self._account_external_work(dt)
         self.time += dt
         self.step_count += 1
@@ -84,10 +91,11 @@ class ExplicitMPM:
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
                     g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
+        self._add_hoop_forces()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17: v_I^t, v~_I^{t+dt}
         self._impose(g.v_old)                                           # line 15
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         g.momentum.fill(0.0)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, True, g.momentum)                 # lines 18-20: x_p, v_p, (mv)_I again
@@ -101,9 +109,10 @@ class ExplicitMPM:
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
+        self._add_hoop_forces()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)                # particles from v_I^{t+dt}
         self._update_stress(dt, g.v_new)                                # stress last, from v_I^{t+dt}
@@ -118,9 +127,10 @@ class ExplicitMPM:
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
+        self._add_hoop_forces()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
 
@@ -132,9 +142,17 @@ class ExplicitMPM:
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
-    def _impose(self, v: np.ndarray) -> float:
+    def _impose(self, v: np.ndarray, record: bool = False) -> float:
+        """Prescribed nodal velocities: rigid bodies, then boundary conditions (which win where
+        both apply). Returns the work of the constraints; `record` marks the update to v~^{t+dt},
+        whose constraint impulses are the rigid bodies' reactions."""
         c = self.constraints
-        return kernels.apply_dirichlet(c.node, c.axis, c.value, self.grid.mass, v)
+        work = self.rigid.impose(self.grid.mass, v, record)
+        return work + kernels.apply_dirichlet(c.node, c.axis, c.value, self.grid.mass, v)
+
+    def _add_hoop_forces(self) -> None:
+        if self.axisymmetry is not None:
+            self.axisymmetry.add_forces(self.spec, self.stencil, self.particles, self.grid.force)
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil
@@ -142,6 +160,8 @@ class ExplicitMPM:
         if inverted >= 0:
             J = float(np.linalg.det(p.F[inverted]))
             self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")
+        if self.axisymmetry is not None:
+            self.axisymmetry.kinematics(self.spec, s, p, v_grid, dt)
         for material, sl in self.materials:
             material.update_stress(p, sl, dt)
 
@@ -166,6 +186,10 @@ class ExplicitMPM:
         """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73)."""
         speed = self.wave_speed + kernels.max_speed_per_axis(self.particles.v)
         return float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300)))
+
+    def reactions(self) -> dict[str, float]:
+        """The rigid bodies' reaction forces (mean since the last call), by series name."""
+        return self.rigid.reactions()
 
     def energies(self) -> Energies:
         p = self.particles

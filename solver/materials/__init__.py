@@ -21,10 +21,12 @@ from solver.materials.j2_plasticity import J2Plasticity
 from solver.materials.johnson_cook import JohnsonCook
 from solver.materials.linear_elastic import LinearElastic
 from solver.materials.neo_hookean import NeoHookean
+from solver.materials.rigid import Rigid
 
 REGISTRY = {
     "linear_elastic": LinearElastic,
     "neo_hookean": NeoHookean,
+    "rigid": Rigid,
     "j2_plasticity": J2Plasticity,
     "johnson_cook": JohnsonCook,
 }
