@@ -50,6 +50,16 @@ def material_point_rows():
     (closed_form, balance, _), wall = timed(tp.adiabatic_heating)
     rows.append(("adiabatic heating, shear to 0.5", "abs((T - Tr) / closed form - 1)", abs(closed_form), wall))
     rows.append(("adiabatic heating, shear to 0.5", "abs(rho c dT / (chi W_p) - 1)", abs(balance), wall))
+    with tempfile.TemporaryDirectory() as tmp:
+        (x, stress, eps_p, exact), wall = timed(tp.plastic_wave_case, Path(tmp))
+    t, h = exact["t"], 0.005
+    behind = (x > 0.1) & (x < exact["c_p"] * t - 4 * h)
+    precursor = (x > exact["c_p"] * t + 4 * h) & (x < exact["c_e"] * t - 2 * h)
+    for name, values, reference in (("stress behind the plastic wave", stress[behind], exact["sigma"]),
+                                    ("plastic strain behind the plastic wave", eps_p[behind], exact["eps_p"]),
+                                    ("stress of the elastic precursor", stress[precursor], exact["sigma_hel"])):
+        rows.append((f"J2 bar on a wall, 1D grid, h = 5 mm: {name}", "abs(median / exact - 1)",
+                     abs(np.median(values) / reference - 1), wall))
     for name, config in tp.ROTATING.items():
         error, wall = timed(tp.rigid_rotation_error, config)
         rows.append((f"rigid rotation by 90 deg, {name}", "max abs(sigma - R sigma0 R^T) / max abs(sigma0)", error, wall))
