@@ -49,6 +49,7 @@ def platen(tmp_path_factory):
 
 
 def test_platen_moves_as_prescribed(platen):
+    assert platen.result.status == "complete", platen.result.message
     first, last = platen.frame(0)["fields"], platen.frame(-1)["fields"]
     rigid = first["body"] == 1
     order0, order1 = np.argsort(first["id"]), np.argsort(last["id"])
