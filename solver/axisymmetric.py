@@ -73,7 +73,6 @@ class Axisymmetry:
         F[:, :2, :2] = particles.F
         F[:, 2, 2] = 1.0
         particles.F, particles.L = F, np.zeros((n, 3, 3))
-        self.grid = grid
         self._r = (float(grid.lower[0]), float(grid.h[0]), int(grid.cells[0]) + 1)
 
     def add_forces(self, spec, stencil, particles, grid_force) -> None:

@@ -7,9 +7,10 @@ a frictionless contact), as a Dirichlet condition on v_I^t and v~_I^{t+dt}.
 Rigid particles carry no mass and no stress, so they take no part in the
 momentum balance; after the step they are moved with the prescribed velocity
 (eq. 4.7) whatever the grid did. The constraint impulse m_I (v_rigid - v~_I)
-summed over a body's nodes is the force it applies to the material; the force
-the material applies to the body (its reaction, eq. of Newton's third law) is
-logged as a time series, averaged over the steps between two log rows.
+summed over a body's nodes, divided by dt, is the force it applies to the
+material; the opposite, the force the material applies to the body (its
+reaction), is logged as a time series, averaged over the steps between two
+log rows.
 """
 from __future__ import annotations
 
