@@ -285,6 +285,24 @@ def test_stored_energy_is_the_work_of_the_pressure(eos, direction):
     assert stored == pytest.approx(work, rel=1e-4)
 
 
+def test_wave_speed_follows_the_compressed_state():
+    """The time step's wave speed is sqrt((rho dp/drho + 4/3 G) / rho) of the current state:
+    dp/dmu by a central difference of the formula (relative error ~ (1e-6)^2, far below 1e-6)."""
+    point = MaterialPoint({**CU, "eos": MG}, 3)
+    rest = point.model.wave_speed
+    G_cu = CU["youngs_modulus"] / (2 * (1 + CU["poisson_ratio"]))
+    assert rest == pytest.approx(math.sqrt((CU["density"] * MG["c0"] ** 2 + 4 / 3 * G_cu) / CU["density"]), rel=1e-12)
+    for _ in range(40):
+        point.step(-1e3 * np.eye(3), 1e-6)       # to mu = 0.13, no shear: the point stays elastic
+    mu = 1.0 / np.linalg.det(point.p.F[0]) - 1.0
+    d = 1e-6
+    dp_dmu = (mie_gruneisen(mu + d, 0.0) - mie_gruneisen(mu - d, 0.0)) / (2 * d)
+    rho = CU["density"] * (1 + mu)
+    expected = math.sqrt(((1 + mu) * dp_dmu + 4 / 3 * G_cu) / rho)
+    assert point.model.wave_speed == pytest.approx(expected, rel=1e-6)
+    assert point.model.wave_speed > 1.05 * rest    # it did stiffen (8 % at mu = 0.13)
+
+
 def test_linear_eos_pressure():
     point = MaterialPoint({**CU, "eos": {"model": "linear"}}, 3)
     K_cu = CU["youngs_modulus"] / (3 * (1 - 2 * CU["poisson_ratio"]))
