@@ -11,8 +11,8 @@ WORD, no plot). The last case forces a fixed dt five times
 the CFL limit and must end with the instability diagnostic, not with garbage.
 
 Sizes fit a shared 2-core machine: the 3D Taylor bar is a quarter at 0.8 mm
-(4,500 particles; --full: 0.3 mm, 84,500 particles, what the issue's ~100k asks,
-examples/taylor_bar_3d.json); the hypervelocity impact is E22 scaled down
+(4,500 particles; --full: 0.3 mm, 84,500 particles, what the issue's ~100k asks);
+the hypervelocity impact is E22 scaled down
 (examples/hypervelocity_lead.json) and, without --full, followed for its first
 10 us (the debris front 66 mm below the plate) on a grid cut to 75 mm.
 """
