@@ -48,6 +48,12 @@ class Constraints:
                     else:
                         values.append(np.full(sel.size, float(component)))
                         expressions.append(None)
+        if scene.axisymmetric and grid.lower[0] == 0.0:   # the axis r = 0: v_r = 0 (review App. G)
+            sel = np.flatnonzero(np.arange(grid.n_nodes) % (grid.cells[0] + 1) == 0)
+            nodes.append(sel)
+            axes.append(np.zeros(sel.size, dtype=np.int64))
+            values.append(np.zeros(sel.size))
+            expressions.append(None)
         self._blocks = list(zip(values, expressions))
         self.node = np.ascontiguousarray(np.concatenate(nodes) if nodes else np.zeros(0, np.int64), dtype=np.int64)
         self.axis = np.ascontiguousarray(np.concatenate(axes) if axes else np.zeros(0, np.int64), dtype=np.int64)

@@ -10,11 +10,11 @@ FORMULATIONS = frozenset({"ulmpm", "tlmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
 SHAPE_FUNCTIONS = frozenset({"linear", "gimp", "cpgimp", "quadratic_bspline", "cubic_bspline", "bernstein"})
 TRANSFERS = frozenset({"flip", "pic", "apic"})
-MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "fluid", "ideal_gas"})
+MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "fluid", "ideal_gas", "rigid", "j2_plasticity", "johnson_cook"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})
 WALL_MODES = frozenset({"stick", "slip"})
-AXISYMMETRIC = False
+AXISYMMETRIC = True
 MAX_PROCESSES = 64   # MPI ranks (solver/parallel); the service caps jobs further (MPM_MAX_PROCESSES)
 
 # Output fields the solver can write per particle (id, body and mass are always written).
@@ -22,4 +22,5 @@ OUTPUT_FIELDS = frozenset({
     "position", "velocity", "stress", "mass", "volume", "density", "pressure",
     "velocity_magnitude", "von_mises", "deformation_gradient", "strain_energy_density",
     "pressure_smoothed", "internal_energy",
+    "plastic_strain", "damage", "temperature",
 })

@@ -51,6 +51,14 @@ def _strain_energy_density(sim) -> np.ndarray:
     return out
 
 
+def _state(name: str, absent: float):
+    """A per-particle state variable of the materials that track it; `absent` elsewhere."""
+    def field(sim) -> np.ndarray:
+        values = sim.particles.extra.get(name)
+        return values if values is not None else np.full(sim.particles.count, absent)
+    return field
+
+
 FIELDS = {
     "position": lambda sim: sim.particles.x,
     "velocity": lambda sim: sim.particles.v,
@@ -65,6 +73,10 @@ FIELDS = {
     "velocity_magnitude": lambda sim: np.linalg.norm(sim.particles.v, axis=1),
     "deformation_gradient": lambda sim: sim.particles.F.reshape(sim.particles.count, -1),
     "strain_energy_density": _strain_energy_density,
+    # 0 for materials without plasticity or damage; temperature NaN where no model tracks it
+    "plastic_strain": _state("plastic_strain", 0.0),
+    "damage": _state("damage", 0.0),
+    "temperature": _state("temperature", np.nan),
 }
 
 

@@ -160,7 +160,8 @@ def run(
                     if finished or sim.step_count % series_every == 0:
                         writer.append_series(time=sim.time, dt=dt, kinetic_energy=e.kinetic,
                                              strain_energy=e.strain, total_energy=e.total,
-                                             external_work=e.external_work, boundary_work=e.boundary_work)
+                                             external_work=e.external_work, boundary_work=e.boundary_work,
+                                             **sim.reactions())
                     supplied = initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0)
                     if not e.total <= ENERGY_GROWTH_LIMIT * supplied + energy_floor:
                         raise Instability(sim.step_count, sim.time, None, "total energy",

@@ -296,6 +296,14 @@ class JohnsonCookDamage(_Model):
     D3: Real
     D4: Real
     D5: Real
+    evolution_factor: Positive = 10.0  # D = k (D_init - 1): 10 in [K] eq. 2.16, 1 in [R] Alg. 13
+
+
+class Failure(_Model):
+    """MPM3DMP 5.3: a particle fails when either criterion given is met."""
+
+    plastic_strain: Positive | None = None  # equivalent plastic strain at failure
+    min_pressure: Annotated[float, Strict(), Field(lt=0)] | None = None  # failure pressure (a tension, < 0)
 
 
 class JohnsonCook(_ElasticMaterial):
@@ -312,6 +320,12 @@ class JohnsonCook(_ElasticMaterial):
     taylor_quinney: Annotated[float, Strict(), Field(ge=0, le=1)]
     eos: Annotated[Union[LinearEOS, MieGruneisenEOS], Field(discriminator="model")] = LinearEOS(model="linear")
     damage: JohnsonCookDamage | None = None
+    failure: Failure | None = None
+
+    def dilatational_wave_speed(self) -> float:
+        """sqrt((K + 4/3 G) / rho) with the EOS bulk modulus (rho0 c0^2 for Mie-Gruneisen)."""
+        bulk = self.density * self.eos.c0**2 if self.eos.model == "mie_gruneisen" else self.bulk_modulus
+        return math.sqrt((bulk + 4 * self.shear_modulus / 3) / self.density)
 
     @field_validator("melt_temperature")
     @classmethod
@@ -448,7 +462,7 @@ class Body(_Model):
     initial_temperature: NonNegative | None = None
     initial_density: Positive | None = None  # ideal_gas bodies only
     initial_pressure: NonNegative | None = None  # ideal_gas bodies only
-    velocity: list[TimeValue] | None = None  # rigid bodies only; None: at rest
+    velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
 
 
 class VelocityCondition(_Model):
@@ -677,15 +691,25 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         length_ok("grid.upper", scene.grid.upper),
         length_ok("grid.cell_size", scene.grid.cell_size if isinstance(scene.grid.cell_size, list) else None),
     ])
+    if scene.axisymmetric and scene.grid.lower is not None and scene.grid.lower[0] < 0:
+        problems.append(("grid.lower[0]", "must be >= 0 in an axisymmetric scene (x is the radius r)"))
     if scene.method.formulation == "ulmpm":
         for name in ("lower", "upper"):
             if getattr(scene.grid, name) is None:
                 problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
                 grid_ok = False
 
-    if scene.parallel.processes > 1 and scene.method.formulation == "tlmpm":
-        problems.append(("parallel.processes", "formulation 'tlmpm' runs on one process for now: the "
-                         "decomposition splits the current configuration, TLMPM's grid is the reference one"))
+    if scene.parallel.processes > 1:
+        if scene.method.formulation == "tlmpm":
+            problems.append(("parallel.processes", "formulation 'tlmpm' runs on one process for now: the "
+                             "decomposition splits the current configuration, TLMPM's grid is the reference one"))
+        if scene.axisymmetric:
+            problems.append(("parallel.processes", "axisymmetric scenes run on one process for now"))
+        if any(getattr(m, "model", None) == "rigid" for m in scene.materials.values()):
+            problems.append(("parallel.processes", "scenes with rigid bodies run on one process for now"))
+    if scene.axisymmetric and scene.method.formulation == "tlmpm":
+        problems.append(("axisymmetric", "axisymmetric scenes need formulation 'ulmpm' for now "
+                         "(the hoop terms are in the update-Lagrangian step)"))
 
     length_ok("gravity", scene.gravity)
     if length_ok("body_force", scene.body_force):
@@ -759,6 +783,9 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
         for name in ("initial_density", "initial_pressure"):
             if getattr(body, name) is not None:
                 problems.append((f"{path}.{name}", "only used with an 'ideal_gas' material"))
+    if isinstance(material, Rigid) and body.initial_velocity is not None:
+        problems.append((f"{path}.initial_velocity", "a 'rigid' body moves with its prescribed velocity; "
+                                                     "use velocity instead"))
     if body.velocity is not None:
         if not isinstance(material, Rigid):
             problems.append((f"{path}.velocity", "a prescribed velocity needs a 'rigid' material; "
@@ -793,6 +820,9 @@ def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
 
 def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:
     lower, upper = body.geometry.shape().bounding_box()
+    if scene.axisymmetric:   # the part at r < 0 is the mirror image of the cross-section: not seeded
+        lower = np.array(lower, dtype=float)
+        lower[0] = max(lower[0], 0.0)
     grid_lower, grid_upper = np.array(scene.grid_lower()), np.array(scene.grid_upper())
     tolerance = 1e-9 * max(scene.cell_sizes())
     if np.all(lower >= grid_lower - tolerance) and np.all(upper <= grid_upper + tolerance):

@@ -11,8 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from solver import kernels, parallel, shape
+from solver.axisymmetric import Axisymmetry
 from solver.loads import BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
+from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, make_stencil, material_slices
 from solver.transfer import AffineTransfer
 
@@ -64,12 +66,15 @@ class ExplicitMPM:
         if self.loads.needs_reference:
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
-        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.particles.mass.min()) if self.particles.count else 0.0
         # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
         self.domain = parallel.decompose(scene, self.shape.SUPPORT)
         self.domain.distribute(self.particles)
-        self._place_grid()
-        self._place_particles()
+        self.place()
+        # (one process only, for now: validation keeps rigid bodies and axisymmetry off several)
+        self.axisymmetry = Axisymmetry(self.particles, self.grid) if scene.axisymmetric else None
+        self.rigid = RigidBodies(scene, self.particles, self.grid)
+        masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
+        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
         self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
         self.time = 0.0
         self.step_count = 0
@@ -77,17 +82,14 @@ class ExplicitMPM:
         self.boundary_work = 0.0
         self._acceleration = None   # the body acceleration of the last step
 
-    @property
-    def wave_speed(self) -> float:
-        """The fastest wave now: a gas's (or compressed fluid's) sound speed follows its state."""
-        return max((m.wave_speed for m, _ in self.materials), default=0.0)
-
     # -- the step ---------------------------------------------------------------
 
     def advance(self, dt: float) -> None:
         """One explicit step of size dt; raises Instability when the state breaks down."""
         self.constraints.set_time(self.time + dt)
+        self.rigid.begin_step(self.particles, self.spec, self.time + dt)
         self._step(dt)
+        self.rigid.end_step(self.particles, dt)
         self._account_external_work(dt)
         self.time += dt
         self.step_count += 1
@@ -122,12 +124,13 @@ class ExplicitMPM:
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
                     g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
+        self._add_hoop_forces()
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum, g.force)                    # (processes: ghost nodes to owners)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17: v_I^t, v~_I^{t+dt}
         self._impose(g.v_old)                                           # line 15
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         halo.share_nodes(g.v_old, g.v_new)                              # (owners' values to ghost nodes)
         g.momentum.fill(0.0)
         self._affine_g2p(g.v_new, True)
@@ -145,11 +148,12 @@ class ExplicitMPM:
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
+        self._add_hoop_forces()
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
@@ -169,10 +173,11 @@ class ExplicitMPM:
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
+        self._add_hoop_forces()
         halo.sum_ghosts(g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
@@ -195,9 +200,17 @@ class ExplicitMPM:
             self.affine.g2p(self.spec, self.stencil, self.particles, self.particles.x, v_grid, double_map,
                             self.grid.momentum)
 
-    def _impose(self, v: np.ndarray) -> float:
+    def _impose(self, v: np.ndarray, record: bool = False) -> float:
+        """Prescribed nodal velocities: rigid bodies, then boundary conditions (which win where
+        both apply). Returns the work of the constraints; `record` marks the update to v~^{t+dt},
+        whose constraint impulses are the rigid bodies' reactions."""
         c = self.constraints
-        return kernels.apply_dirichlet(c.node, c.axis, c.value, self.grid.mass, v)
+        work = self.rigid.impose(self.grid.mass, v, record)
+        return work + kernels.apply_dirichlet(c.node, c.axis, c.value, self.grid.mass, v)
+
+    def _add_hoop_forces(self) -> None:
+        if self.axisymmetry is not None:
+            self.axisymmetry.add_forces(self.spec, self.stencil, self.particles, self.grid.force)
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil
@@ -205,6 +218,8 @@ class ExplicitMPM:
         if inverted >= 0:
             J = float(np.linalg.det(p.F[inverted]))
             self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")
+        if self.axisymmetry is not None:
+            self.axisymmetry.kinematics(self.spec, s, p, v_grid, dt)
         for material, sl in self.materials:
             material.update_stress(p, sl, dt)
 
@@ -221,10 +236,20 @@ class ExplicitMPM:
 
     # -- diagnostics ------------------------------------------------------------
 
+    @property
+    def wave_speed(self) -> float:
+        """The fastest material wave speed now: it follows the state (a gas's sound speed,
+        an EOS stiffening under compression)."""
+        return max((m.wave_speed for m, _ in self.materials), default=0.0)
+
     def stable_time_step(self, cfl: float) -> float:
         """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73)."""
         speed = self.domain.max(self.wave_speed) + self.domain.max(kernels.max_speed_per_axis(self.particles.v))
         return float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300)))
+
+    def reactions(self) -> dict[str, float]:
+        """The rigid bodies' reaction forces (mean since the last call), by series name."""
+        return self.rigid.reactions()
 
     def energies(self) -> Energies:
         p = self.particles

@@ -112,6 +112,8 @@ def _largest_speed(scene: Scene, body: Body) -> float:
 def _largest_norm(components: list[float | str], variables: tuple[str, ...], values: dict) -> float:
     squares = 0.0
     for component in components:
+        if component is None:   # a free axis of a rigid body
+            continue
         value = compile_expression(component, variables).evaluate(**values) if isinstance(component, str) else component
         squares = squares + np.square(value)
     largest = float(np.max(np.sqrt(squares)))

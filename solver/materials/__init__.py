@@ -8,9 +8,11 @@ stress. Each model is one module with a class offering:
     .update_stress(particles, sl, dt)    sl: slice of the particles made of it
     .particle_strain_energy(particles, sl)  stored energy of each of those particles
     .start(scene, particles, sl)          optional: initial state the bodies give (a gas's e, p)
+    .init_particles(particles, sl, scene)   optional: allocate the per-particle state
+                                         the model needs (particles.require)
 
-`wave_speed` may change as the state does (a gas's sound speed): the time step
-reads it after every stress update.
+`wave_speed` may change as the state does (a gas's sound speed, an EOS stiffening
+under compression): the time step reads its current value.
 
 Particles are sorted by material, so each model works on one contiguous slice.
 """
@@ -18,14 +20,20 @@ from __future__ import annotations
 
 from solver.materials.fluid import Fluid
 from solver.materials.ideal_gas import IdealGas
+from solver.materials.j2_plasticity import J2Plasticity
+from solver.materials.johnson_cook import JohnsonCook
 from solver.materials.linear_elastic import LinearElastic
 from solver.materials.neo_hookean import NeoHookean
+from solver.materials.rigid import Rigid
 
 REGISTRY = {
     "linear_elastic": LinearElastic,
     "neo_hookean": NeoHookean,
     "fluid": Fluid,
     "ideal_gas": IdealGas,
+    "rigid": Rigid,
+    "j2_plasticity": J2Plasticity,
+    "johnson_cook": JohnsonCook,
 }
 
 
@@ -37,3 +45,9 @@ def create(config, dimension: int):
     return model(config, dimension)
 
 
+def init_particles(models, particles, scene) -> None:
+    """Let each model allocate the per-particle state it needs."""
+    for model, sl in models:
+        init = getattr(model, "init_particles", None)
+        if init is not None:
+            init(particles, sl, scene)

@@ -209,6 +209,9 @@ class SlabDomain:
     def max(self, value):
         return self._reduce(value, MPI.MAX)
 
+    def min(self, value):
+        return self._reduce(value, MPI.MIN)
+
     def _reduce(self, value, op):
         a = np.array(value, dtype=np.float64)
         self.comm.Allreduce(MPI.IN_PLACE, a, op=op)

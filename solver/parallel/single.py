@@ -56,6 +56,9 @@ class SingleProcess:
     def max(self, value):
         return value
 
+    def min(self, value):
+        return value
+
     def any(self, flag: bool) -> bool:
         return bool(flag)
 

@@ -1,0 +1,83 @@
+"""Axisymmetric ULMPM in 2D (review Appendix G): x = r, y = z, theta around the y axis.
+
+What changes against plane strain:
+
+- a particle stands for the ring it sweeps around the axis: its volume and mass
+  are the plane ones times 2 pi r (the review's per-radian quantities times 2 pi,
+  so masses, energies and forces are those of the whole body and compare
+  directly with a 3D run);
+- the velocity gradient and the deformation gradient are 3x3, index 2 being
+  theta: L_thth = sum_I N_I v_rI / r_p (eq. G.4), F_thth <- (1 + dt L_thth) F_thth,
+  so every material sees the hoop rate and stretch as a third principal direction;
+- the radial internal force gets the hoop term -V_p sigma_thth N_I / r_p (eq. G.2);
+- nodes on the axis r = 0 get v_r = 0 (solver/boundary.py).
+
+r_p in the hoop terms is sum_I N_I r_I, the radius where the weights were
+evaluated: for linear (and B-spline) functions it is the particle's radius at
+the start of the step, and a velocity v_r = a r gives L_thth = a exactly.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def add_hoop_force(spec, idx, w, lower_r, h_r, nodes_r, volume, stress, grid_force):
+    """f_rI -= V_p sigma_thth,p N_I(x_p) / r_p (the third term of eq. G.2)."""
+    n = w.shape[0]
+    nk = len(spec[1])
+    for p in range(n):
+        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r)
+        s = volume[p] * stress[p, 2, 2] / r
+        for k in range(nk):
+            grid_force[idx[p, k], 0] -= w[p, k] * s
+
+
+@njit(cache=True)
+def hoop_kinematics(spec, idx, w, lower_r, h_r, nodes_r, v_grid, dt, L, F, volume):
+    """L_thth = sum_I N_I v_rI / r_p (eq. G.4); F_thth and the volume follow."""
+    n = w.shape[0]
+    nk = len(spec[1])
+    for p in range(n):
+        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r)
+        vr = 0.0
+        for k in range(nk):
+            vr += w[p, k] * v_grid[idx[p, k], 0]
+        rate = vr / r
+        L[p, 2, 2] = rate
+        F[p, 2, 2] *= 1.0 + dt * rate
+        volume[p] *= 1.0 + dt * rate   # the kinematics kernel took det F with the old F_thth
+
+
+@njit(cache=True)
+def _radius(idx, w, p, nk, lower_r, h_r, nodes_r):
+    """sum_I N_I(x_p) r_I; nodes are numbered with r fastest."""
+    r = 0.0
+    for k in range(nk):
+        r += w[p, k] * (lower_r + h_r * (idx[p, k] % nodes_r))
+    return r
+
+
+class Axisymmetry:
+    """Turns the plane-strain state of a 2D scene into the axisymmetric one and adds its terms."""
+
+    def __init__(self, particles, grid):
+        ring = 2.0 * math.pi * particles.x[:, 0]
+        for name in ("mass", "volume", "volume0"):
+            getattr(particles, name)[:] *= ring
+        n = particles.count
+        F = np.zeros((n, 3, 3))
+        F[:, :2, :2] = particles.F
+        F[:, 2, 2] = 1.0
+        particles.F, particles.L = F, np.zeros((n, 3, 3))
+        self._r = (float(grid.lower[0]), float(grid.h[0]), int(grid.cells[0]) + 1)
+
+    def add_forces(self, spec, stencil, particles, grid_force) -> None:
+        add_hoop_force(spec, stencil.idx, stencil.w, *self._r, particles.volume, particles.stress, grid_force)
+
+    def kinematics(self, spec, stencil, particles, v_grid, dt: float) -> None:
+        p = particles
+        hoop_kinematics(spec, stencil.idx, stencil.w, *self._r, v_grid, dt, p.L, p.F, p.volume)

@@ -1,0 +1,176 @@
+"""Rigid bodies: particles that move with a prescribed velocity (review 4.2.4, Algorithm 4).
+
+A rigid body is a moving velocity boundary condition made of particles. Each
+step, every grid node of a cell that holds a rigid particle gets the body's
+velocity (on the axes it prescribes: a `null` component leaves that axis free,
+a frictionless contact), as a Dirichlet condition on v_I^t and v~_I^{t+dt}.
+Rigid particles carry no mass and no stress, so they take no part in the
+momentum balance; after the step they are moved with the prescribed velocity
+(eq. 4.7) whatever the grid did. The constraint impulse m_I (v_rigid - v~_I)
+summed over a body's nodes, divided by dt, is the force it applies to the
+material; the opposite, the force the material applies to the body (its
+reaction), is logged as a time series, averaged over the steps between two
+log rows.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from solver.expressions import compile_expression
+
+AXES = "xyz"
+
+
+@njit(cache=True)
+def mark_nodes(spec, index, x, body, lower, inv_h, cells, strides, node_body, out):
+    """For each rigid particle (index), the 2**dim nodes of its cell: node_body[node] = its body.
+
+    Returns the number of nodes written to `out` (each once). node_body must be -1
+    everywhere on entry; the caller resets the marked entries afterwards.
+    """
+    dim, corners = len(spec[0]), 1 << len(spec[0])
+    count = 0
+    for i in range(index.shape[0]):
+        p = index[i]
+        b = body[p]
+        base = 0
+        for a in range(dim):
+            i = int((x[p, a] - lower[a]) * inv_h[a])
+            base += min(max(i, 0), cells[a] - 1) * strides[a]
+        for k in range(corners):
+            node = base
+            for a in range(dim):
+                node += ((k >> a) & 1) * strides[a]
+            if node_body[node] < 0:
+                node_body[node] = b
+                out[count] = node
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def impose(nodes, node_body, velocity, imposed, grid_mass, v, record, impulse):
+    """v_I = the body's velocity on its imposed axes; returns the work sum m_I (v_b - v_I) v_b.
+
+    With `record`, impulse[b] accumulates m_I (v_b - v_I): the force times dt that
+    the body applies to the material.
+    """
+    work = 0.0
+    for i in range(nodes.shape[0]):
+        node = nodes[i]
+        b = node_body[node]
+        for a in range(v.shape[1]):
+            if imposed[b, a]:
+                j = grid_mass[node] * (velocity[b, a] - v[node, a])
+                work += j * velocity[b, a]
+                if record:
+                    impulse[b, a] += j
+                v[node, a] = velocity[b, a]
+    return work
+
+
+@njit(cache=True)
+def move_particles(index, body, start, dt, velocity, x, v, F, stress):
+    """Rigid particles at start + dt v_b (eq. 4.7) with velocity v_b, F = I and no stress."""
+    for i in range(index.shape[0]):
+        p = index[i]
+        b = body[p]
+        for a in range(x.shape[1]):
+            x[p, a] = start[i, a] + dt * velocity[b, a]
+            v[p, a] = velocity[b, a]
+        for a in range(F.shape[1]):
+            for c in range(F.shape[2]):
+                F[p, a, c] = 1.0 if a == c else 0.0
+        for a in range(3):
+            for c in range(3):
+                stress[p, a, c] = 0.0
+
+
+class RigidBodies:
+    """The scene's rigid bodies: prescribed velocities, marked nodes, reactions."""
+
+    def __init__(self, scene, particles, grid):
+        rigid_materials = {name for name, m in scene.materials.items() if m.model == "rigid"}
+        dim = scene.dimension
+        n_bodies = len(scene.bodies)
+        self.is_rigid = np.array([b.material in rigid_materials for b in scene.bodies])
+        self.any = bool(self.is_rigid.any())
+        self.grid = grid
+        self.names = [b.name.replace("/", "_") for b in scene.bodies]
+        self.velocity = np.zeros((n_bodies, dim))       # prescribed at the end of the step
+        self.imposed = np.zeros((n_bodies, dim), dtype=np.bool_)
+        self._components = {}
+        for b, body in enumerate(scene.bodies):
+            if not self.is_rigid[b]:
+                continue
+            components = body.velocity if body.velocity is not None else [0.0] * dim
+            self._components[b] = [compile_expression(c, ("t",)) if isinstance(c, str) else c for c in components]
+            self.imposed[b] = [c is not None for c in components]
+        self.impulse = np.zeros((n_bodies, dim))
+        self._elapsed = 0.0
+        if not self.any:
+            return
+        particles.mass[self.is_rigid[particles.body]] = 0.0   # boundary conditions, not bodies
+        self._node_body = np.full(grid.n_nodes, -1, dtype=np.int64)
+        self._nodes = np.zeros(0, dtype=np.int64)
+        self._body_seen = None   # the particles.body array the index below was built from
+        self._set_velocity(0.0)
+        index = self._rigid_index(particles)
+        move_particles(index, particles.body, particles.x[index], 0.0, self.velocity,
+                       particles.x, particles.v, particles.F, particles.stress)
+
+    def _set_velocity(self, t: float) -> None:
+        for b, components in self._components.items():
+            for a, c in enumerate(components):
+                if c is None:
+                    self.velocity[b, a] = 0.0   # a free axis: the body does not move along it
+                else:
+                    self.velocity[b, a] = float(c.evaluate(t=t)) if not isinstance(c, float) else c
+
+    def _rigid_index(self, particles) -> np.ndarray:
+        """Indices of the rigid particles, rebuilt only when the particle arrays were replaced."""
+        if particles.body is not self._body_seen:
+            self._body_seen = particles.body
+            self._index = np.flatnonzero(self.is_rigid[particles.body])
+            self._marked = np.empty(self._index.size << particles.dimension, dtype=np.int64)
+        return self._index
+
+    # -- the step -----------------------------------------------------------------
+
+    def begin_step(self, particles, spec, t_end: float) -> None:
+        """Mark the nodes of the rigid particles' cells and evaluate the velocities at t_end."""
+        if not self.any:
+            return
+        g = self.grid
+        self._set_velocity(t_end)
+        self._node_body[self._nodes] = -1
+        index = self._rigid_index(particles)
+        count = mark_nodes(spec, index, particles.x, particles.body, g.lower,
+                           g.inv_h, g.cells, g.strides, self._node_body, self._marked)
+        self._nodes = self._marked[:count]
+        self._start = particles.x[index]
+
+    def impose(self, grid_mass, v, record: bool) -> float:
+        if not self.any:
+            return 0.0
+        return impose(self._nodes, self._node_body, self.velocity, self.imposed, grid_mass, v, record, self.impulse)
+
+    def end_step(self, particles, dt: float) -> None:
+        if not self.any:
+            return
+        p = particles
+        move_particles(self._index, p.body, self._start, dt, self.velocity, p.x, p.v, p.F, p.stress)
+        self._elapsed += dt
+
+    # -- output -------------------------------------------------------------------
+
+    def reactions(self) -> dict[str, float]:
+        """reaction_<body>_<axis>: mean force of the material on each rigid body since the last call."""
+        if not self.any:
+            return {}
+        force = -self.impulse / self._elapsed if self._elapsed > 0 else np.zeros_like(self.impulse)
+        self.impulse[:] = 0.0
+        self._elapsed = 0.0
+        return {f"reaction_{self.names[b]}_{AXES[a]}": float(force[b, a])
+                for b in np.flatnonzero(self.is_rigid) for a in range(force.shape[1])}
