@@ -65,13 +65,22 @@ def test_stop_sends_sigterm_and_the_child_ends_partial(tmp_path):
 
 
 def test_a_child_ignoring_sigterm_is_killed_after_the_grace_period(tmp_path):
-    started = time.monotonic()
+    # stop only once the child reports (it has set SIGTERM aside by then): a SIGTERM
+    # during its start-up would end it before it could ignore the signal
+    asked = []
+
+    def should_stop():
+        if seen and not asked:
+            asked.append(time.monotonic())
+        return "cancelled" if asked else None
+
+    seen: list = []
     outcome = run_solver(_child(tmp_path, "stubborn", 100000), tmp_path / "solver.log",
-                         on_progress=lambda _: None, should_stop=lambda: "cancelled",
+                         on_progress=seen.append, should_stop=should_stop,
                          poll_interval=0.05, grace_seconds=0.5)
     assert outcome.stopped == "cancelled" and outcome.returncode == -9
     assert outcome.done is None
-    assert time.monotonic() - started < 5
+    assert time.monotonic() - asked[0] < 5
 
 
 def test_the_whole_process_group_is_stopped(tmp_path):

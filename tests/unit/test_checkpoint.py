@@ -119,7 +119,7 @@ def test_sigterm_writes_a_checkpoint_and_mpm_run_resume_finishes_the_run(referen
     scene_file = tmp_path / "scene.json"
     # long enough to be stopped mid-way: the same column for more time
     longer = column()
-    longer["time"]["end"] = 1.0
+    longer["time"]["end"] = 30.0   # seconds of run time: it is stopped within 0.25 s of the signal
     scene_file.write_text(json.dumps(longer))
     out = tmp_path / "out"
     command = [sys.executable, "-m", "solver", "run", str(scene_file), "-o", str(out), "--progress", "json"]
