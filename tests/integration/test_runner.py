@@ -66,8 +66,9 @@ def test_stop_sends_sigterm_and_the_child_ends_partial(tmp_path):
 
 def test_a_child_ignoring_sigterm_is_killed_after_the_grace_period(tmp_path):
     started = time.monotonic()
+    seen = []  # stop once the child runs (its SIGTERM handler is in place), not before
     outcome = run_solver(_child(tmp_path, "stubborn", 100000), tmp_path / "solver.log",
-                         on_progress=lambda _: None, should_stop=lambda: "cancelled",
+                         on_progress=seen.append, should_stop=lambda: "cancelled" if seen else None,
                          poll_interval=0.05, grace_seconds=0.5)
     assert outcome.stopped == "cancelled" and outcome.returncode == -9
     assert outcome.done is None
