@@ -113,15 +113,18 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     # over, and this run stops when it finds its lease gone.
     def should_stop() -> str | None:
         nonlocal lease_renewed
+        try:  # first: it is also what keeps the lease while a stop's grace runs
+            if time.monotonic() - lease_renewed > settings.lease_seconds / 6:
+                if not store.renew_lease(job_id, token, settings.lease_seconds):
+                    return "lease_lost"
+                lease_renewed = time.monotonic()
+        except redis.RedisError as exc:
+            log.warning("redis unavailable: %s", exc, extra={"job_id": job_id})
         if _shutting_down.is_set():
             return "shutdown"
         if quota.check() is not None:
             return "disk_quota"
         try:
-            if time.monotonic() - lease_renewed > settings.lease_seconds / 6:
-                if not store.renew_lease(job_id, token, settings.lease_seconds):
-                    return "lease_lost"
-                lease_renewed = time.monotonic()
             if store.cancel_requested(job_id):
                 return "cancelled"
         except redis.RedisError as exc:

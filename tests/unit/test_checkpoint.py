@@ -112,22 +112,37 @@ def test_a_crash_resumes_from_the_last_periodic_checkpoint(reference, tmp_path, 
     assert_same_result(uninterrupted.result_path, resumed.result_path)
 
 
-def test_sigterm_writes_a_checkpoint_and_mpm_run_resume_finishes_the_run(reference, tmp_path):
+def test_sigterm_writes_a_checkpoint_and_mpm_run_resume_finishes_the_run(tmp_path):
     """`mpm run` in its own process, stopped by SIGTERM, continued by `mpm run --resume DIR`
     (the scene read back from the checkpoint)."""
     import json
     scene_file = tmp_path / "scene.json"
-    # long enough to be stopped mid-way: the same column for more time
-    longer = column()
-    longer["time"]["end"] = 30.0   # seconds of run time: it is stopped within 0.25 s of the signal
-    scene_file.write_text(json.dumps(longer))
+    # two elastic disks between slip walls: stable however long, 10000 steps (about a second)
+    disk = {"material": "m", "particles_per_cell": 2}
+    boxed = {
+        "version": 1, "name": "boxed", "dimension": 2,
+        "grid": {"lower": [-0.5, -0.5], "upper": [0.5, 0.5], "cell_size": 0.05},
+        "materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1000,
+                            "poisson_ratio": 0.3}},
+        "bodies": [{**disk, "name": "a", "geometry": {"type": "sphere", "center": [-0.2, -0.2], "radius": 0.15},
+                    "initial_velocity": [0.1, 0.1]},
+                   {**disk, "name": "b", "geometry": {"type": "sphere", "center": [0.2, 0.2], "radius": 0.15},
+                    "initial_velocity": [-0.1, -0.1]}],
+        "boundary_conditions": [{"type": "wall", "face": f, "mode": "slip"} for f in ("x-", "x+", "y-", "y+")],
+        "time": {"end": 10.0, "dt": 0.001},
+        "output": {"frames": 11, "fields": ["position", "velocity", "stress"]},
+    }
+    scene_file.write_text(json.dumps(boxed))
     out = tmp_path / "out"
     command = [sys.executable, "-m", "solver", "run", str(scene_file), "-o", str(out), "--progress", "json"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, text=True)
-    for line in process.stdout:  # wait until it is stepping
+    for line in process.stdout:  # stepping (the signal handlers are in place): freeze it there
         if json.loads(line).get("step", 0) > 0:
+            process.send_signal(signal.SIGSTOP)
             break
+    assert json.loads(line)["step"] < 10000, "the run ended before the signal: make it longer"
     process.send_signal(signal.SIGTERM)
+    process.send_signal(signal.SIGCONT)
     process.communicate(timeout=60)
     assert process.returncode == 3  # partial: cancelled
     assert (out / CHECKPOINT_FILE).exists()
@@ -135,7 +150,7 @@ def test_sigterm_writes_a_checkpoint_and_mpm_run_resume_finishes_the_run(referen
     done = subprocess.run([sys.executable, "-m", "solver", "run", "--resume", str(out), "--progress", "none"],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    uninterrupted = run(longer, tmp_path / "uninterrupted")
+    uninterrupted = run(boxed, tmp_path / "uninterrupted")
     assert_same_result(uninterrupted.result_path, out / "result.h5")
 
 
