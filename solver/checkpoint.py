@@ -99,7 +99,7 @@ class Checkpointer:
         self.scene_json = scene.model_dump_json()
         self.policy = policy
         self.writer = writer
-        if restart is not None:
+        if restart is not None and isinstance(writer, ResultWriter):   # the process that writes the file
             _carry_over(writer, Path(out_dir) / RESUME_SOURCE, restart)
         self.last_step = restart.step if restart else 0
         self.last_time = time.monotonic()
