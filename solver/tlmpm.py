@@ -32,12 +32,9 @@ class TotalLagrangianMPM(ExplicitMPM):
     """Particles, grid and the total-Lagrangian step of one scene."""
 
     def __init__(self, scene):
-        super().__init__(scene)
+        super().__init__(scene)                                         # places the grid: weights at X_p
         p = self.particles
-        if p.X is None:
-            p.X = p.x.copy()
         self.piola = np.zeros((p.count, scene.dimension, scene.dimension))
-        self._reference_weights()                                       # Alg. 3 lines 3-4, once
 
     # -- the step (Algorithm 3; USL and USF differ from MUSL as in ULMPM) --------
 
@@ -98,8 +95,12 @@ class TotalLagrangianMPM(ExplicitMPM):
     # -- phases -----------------------------------------------------------------
 
     def place(self) -> None:
+        """The grid and the reference weights (Alg. 3 lines 3-4): once at the start, and
+        again for a new stencil (a restart)."""
         super().place()
-        self._reference_weights()          # a new stencil (a restart): the reference weights again
+        if self.particles.X is None:
+            self.particles.X = self.particles.x.copy()
+        self._reference_weights()
 
     def _reference_weights(self) -> None:
         """phi_I(X_p) and grad0 phi_I(X_p): the stencil never changes afterwards."""

@@ -126,3 +126,17 @@ def test_should_stop_ends_the_run_as_partial(tmp_path):
     assert result.time < 50.0
     with h5py.File(result.result_path) as h5:
         assert h5.attrs["status"] == "partial"
+
+
+def test_tlmpm_translates_a_free_body_rigidly_without_reference_body_forces(tmp_path):
+    """TLMPM takes its weights at the reference positions X_p, which exist whether or
+    not a body force is written in X, Y, Z: a free block moving at constant velocity
+    keeps its velocity and moves by v t (no stress arises in a rigid translation)."""
+    velocity = [0.3, -0.1]
+    scene = block(velocity=velocity, method={"formulation": "tlmpm"}, time={"end": 0.05, "dt": 1e-3})
+    result = run(scene, tmp_path)
+    assert result.status == "complete"
+    first, last = read_frame(result.result_path, 0), read_frame(result.result_path, -1)
+    np.testing.assert_allclose(last["fields"]["velocity"], np.tile(velocity, (result.particles, 1)), atol=1e-12)
+    np.testing.assert_allclose(last["fields"]["position"] - first["fields"]["position"],
+                               np.tile(np.multiply(velocity, 0.05), (result.particles, 1)), atol=1e-12)
