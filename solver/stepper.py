@@ -66,6 +66,11 @@ class ExplicitMPM:
         if self.loads.needs_reference:
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
+        self.time = 0.0
+        self.step_count = 0
+        self.external_work = 0.0
+        self.boundary_work = 0.0
+        self._acceleration = None   # the body acceleration of the last step
         # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
         self.domain = parallel.decompose(scene, self.shape.SUPPORT)
         self.domain.distribute(self.particles)
@@ -76,11 +81,6 @@ class ExplicitMPM:
         masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
         self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
-        self.time = 0.0
-        self.step_count = 0
-        self.external_work = 0.0
-        self.boundary_work = 0.0
-        self._acceleration = None   # the body acceleration of the last step
 
     # -- the step ---------------------------------------------------------------
 
