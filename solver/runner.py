@@ -173,13 +173,15 @@ def run(
                     reason, message = "max_steps", f"stopped at time.max_steps = {scene.time.max_steps}"
                     break
                 now = wallclock.perf_counter()
+                asked = signals.requested   # a signal is honoured at the next step (a flag: no cost)
                 if domain.root_says(now - last_report >= PROGRESS_INTERVAL_S):
                     last_report = now
                     if progress is not None and domain.is_root:
                         progress(_progress(sim, end, dt, started, now, last_energies))
-                    if domain.any(signals.requested or (should_stop is not None and should_stop())):
-                        reason, message = "cancelled", f"stopped on request at step {sim.step_count}"
-                        break
+                    asked = asked or (should_stop is not None and should_stop())
+                if domain.any(asked):
+                    reason, message = "cancelled", f"stopped on request at step {sim.step_count}"
+                    break
 
                 dt = fixed_dt or sim.stable_time_step(scene.time.cfl)
                 # land exactly on output times and on the end time
