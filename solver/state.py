@@ -198,7 +198,4 @@ def material_slices(scene, body: np.ndarray) -> dict[str, slice]:
 def make_materials(scene, slices: dict[str, slice], particles: Particles) -> list[tuple[object, slice]]:
     models = [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
     materials.init_particles(models, particles, scene)
-    for model, sl in models:
-        if hasattr(model, "start"):
-            model.start(scene, particles, sl)
     return models

@@ -49,7 +49,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17
         self._impose(g.v_old)                                           # line 15
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         g.momentum.fill(0.0)
         self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
@@ -68,7 +68,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         self._affine_p2g()
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
@@ -87,7 +87,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume0, self.piola, acc, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
-        self.boundary_work += self._impose(g.v_new)
+        self.boundary_work += self._impose(g.v_new, record=True)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)

@@ -7,9 +7,9 @@ stress. Each model is one module with a class offering:
     .wave_speed                          dilatational wave speed for the time step
     .update_stress(particles, sl, dt)    sl: slice of the particles made of it
     .particle_strain_energy(particles, sl)  stored energy of each of those particles
-    .start(scene, particles, sl)          optional: initial state the bodies give (a gas's e, p)
-    .init_particles(particles, sl, scene)   optional: allocate the per-particle state
-                                         the model needs (particles.require)
+    .init_particles(particles, sl, scene)   optional: allocate the per-particle state the
+                                         model needs (particles.require) and set it from
+                                         the bodies (a gas's e and p, a temperature)
 
 `wave_speed` may change as the state does (a gas's sound speed, an EOS stiffening
 under compression): the time step reads its current value.
@@ -46,7 +46,7 @@ def create(config, dimension: int):
 
 
 def init_particles(models, particles, scene) -> None:
-    """Let each model allocate the per-particle state it needs."""
+    """Let each model allocate and set the per-particle state it needs."""
     for model, sl in models:
         init = getattr(model, "init_particles", None)
         if init is not None:

@@ -73,7 +73,7 @@ class IdealGas:
         self.cell = 0.0
         self.wave_speed = 0.0
 
-    def start(self, scene, particles, sl: slice) -> None:
+    def init_particles(self, particles, sl: slice, scene) -> None:
         """Initial state from the bodies: e = p / ((gamma - 1) rho), sigma = -p I (mass is rho V already)."""
         self.cell = min(scene.cell_sizes())
         body = particles.body[sl]
