@@ -45,29 +45,31 @@ def support_spec(shape_function: str) -> tuple:
     return (0,) * FUSED_SHAPES[shape_function]
 
 
-def variant_spec(mode: int, affine: bool) -> tuple:
-    """(mode, affine) as tuple lengths, so that numba compiles each variant with its
-    branches folded away."""
-    return ((0,) * mode, (0,) * int(affine))
+def variant_spec(mode: int, affine: bool, flip: bool, loaded: bool) -> tuple:
+    """What a kernel does, as tuple lengths, so that numba compiles each variant with
+    the branches of the others folded away: the G2P mode, APIC or not, FLIP (a blend
+    that needs v_old) or not, a body force or not."""
+    return ((0,) * mode, (0,) * int(affine), (0,) * int(flip), (0,) * int(loaded))
 
 
 # -- weights along one axis ------------------------------------------------------
 
 @njit(cache=True)
 def _axis(S, x, lower, inv_h, cells):
-    """First node, 1D weights and derivatives (times inv_h) of a position along one
-    axis, exactly as solver/shape/linear.py and quadratic_bspline.py compute them;
-    `ok` is False outside the grid (or NaN)."""
+    """First node i, position in cells from it f, 1D weights and derivatives (times
+    inv_h) of a position along one axis, exactly as solver/shape/linear.py and
+    quadratic_bspline.py compute them; `ok` is False outside the grid (or NaN).
+    Node i + j lies at (j - f) h from the particle."""
     s = (x - lower) * inv_h
     if S == 2:
         ok = s >= 0.0 and s <= cells
         i = min(int(s), cells - 1) if ok else 0
         f = s - i
-        return ok, i, (1.0 - f, f, 0.0), (-inv_h, inv_h, 0.0)
+        return ok, i, f, (1.0 - f, f, 0.0), (-inv_h, inv_h, 0.0)
     ok = s >= 0.5 - _TOUCH and s <= cells - 0.5 + _TOUCH
     i = min(max(int(s - 0.5), 0), cells - 2) if ok else 0
     f = s - i
-    return (ok, i, (0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2),
+    return (ok, i, f, (0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2),
             (-(1.5 - f) * inv_h, -2.0 * (f - 1.0) * inv_h, (f - 0.5) * inv_h))
 
 
@@ -103,7 +105,7 @@ def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
     """m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =
     sum_p m_p w b_p - V_p sigma_p grad w. bad[t]: first particle of block t outside the grid."""
     S = len(support)
-    affine = len(variant[1]) == 1
+    affine, loaded = len(variant[1]) == 1, len(variant[3]) == 1
     threads = copies_mass.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
     shared_acc = acc.shape[0] == 1
@@ -111,8 +113,8 @@ def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
         gm, gp, gf = _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
-            okx, ix, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            oky, iy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+            okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+            oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
             if not (okx and oky):
                 bad[t] = p
                 break
@@ -122,8 +124,11 @@ def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
             vol = volume[p]
             sxx, sxy, syx, syy = vol * stress[p, 0, 0], vol * stress[p, 0, 1], vol * stress[p, 1, 0], vol * stress[p, 1, 1]
             mvx, mvy = m * v[p, 0], m * v[p, 1]
+            mc00 = mc01 = mc10 = mc11 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
+            if affine:
+                mc00, mc01, mc10, mc11 = m * C[p, 0, 0], m * C[p, 0, 1], m * C[p, 1, 0], m * C[p, 1, 1]
             for j in range(S):
-                dy = lower[1] + h[1] * (iy + j) - x[p, 1]
+                dy = (j - fy) * h[1]
                 row = (iy + j) * strides[1] - offset
                 for i in range(S):
                     node = row + (ix + i) * strides[0]
@@ -132,14 +137,18 @@ def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
                     dwy = wx[i] * gy[j]
                     px, py = mvx, mvy
                     if affine:
-                        dx = lower[0] + h[0] * (ix + i) - x[p, 0]
-                        px += m * (C[p, 0, 0] * dx + C[p, 0, 1] * dy)
-                        py += m * (C[p, 1, 0] * dx + C[p, 1, 1] * dy)
+                        dx = (i - fx) * h[0]
+                        px += mc00 * dx + mc01 * dy
+                        py += mc10 * dx + mc11 * dy
                     gm[node] += w * m
                     gp[node, 0] += w * px
                     gp[node, 1] += w * py
-                    gf[node, 0] += w * max_ - sxx * dwx - sxy * dwy
-                    gf[node, 1] += w * may - syx * dwx - syy * dwy
+                    if loaded:
+                        gf[node, 0] += w * max_ - sxx * dwx - sxy * dwy
+                        gf[node, 1] += w * may - syx * dwx - syy * dwy
+                    else:
+                        gf[node, 0] -= sxx * dwx + sxy * dwy
+                        gf[node, 1] -= syx * dwx + syy * dwy
     _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
@@ -148,7 +157,7 @@ def p2g_3d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
            grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad):
     """p2g_2d in 3D."""
     S = len(support)
-    affine = len(variant[1]) == 1
+    affine, loaded = len(variant[1]) == 1, len(variant[3]) == 1
     threads = copies_mass.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
     shared_acc = acc.shape[0] == 1
@@ -156,9 +165,9 @@ def p2g_3d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
         gm, gp, gf = _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
-            okx, ix, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            oky, iy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            okz, iz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
+            okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+            oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+            okz, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
             if not (okx and oky and okz):
                 bad[t] = p
                 break
@@ -170,30 +179,41 @@ def p2g_3d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
             s00, s01, s02 = vol * stress[p, 0, 0], vol * stress[p, 0, 1], vol * stress[p, 0, 2]
             s10, s11, s12 = vol * stress[p, 1, 0], vol * stress[p, 1, 1], vol * stress[p, 1, 2]
             s20, s21, s22 = vol * stress[p, 2, 0], vol * stress[p, 2, 1], vol * stress[p, 2, 2]
+            mc00 = mc01 = mc02 = mc10 = mc11 = mc12 = mc20 = mc21 = mc22 = 0.0   # m_p C_p, as in 2D
+            if affine:
+                mc00, mc01, mc02 = m * C[p, 0, 0], m * C[p, 0, 1], m * C[p, 0, 2]
+                mc10, mc11, mc12 = m * C[p, 1, 0], m * C[p, 1, 1], m * C[p, 1, 2]
+                mc20, mc21, mc22 = m * C[p, 2, 0], m * C[p, 2, 1], m * C[p, 2, 2]
             for k in range(S):
-                dz = lower[2] + h[2] * (iz + k) - x[p, 2]
+                dz = (k - fz) * h[2]
                 for j in range(S):
-                    dy = lower[1] + h[1] * (iy + j) - x[p, 1]
+                    dy = (j - fy) * h[1]
                     row = (iy + j) * strides[1] + (iz + k) * strides[2] - offset
+                    wyz, gyz, wygz = wy[j] * wz[k], gy[j] * wz[k], wy[j] * gz[k]
                     for i in range(S):
                         node = row + (ix + i) * strides[0]
-                        w = wx[i] * wy[j] * wz[k]
-                        dwx = gx[i] * wy[j] * wz[k]
-                        dwy = wx[i] * gy[j] * wz[k]
-                        dwz = wx[i] * wy[j] * gz[k]
+                        w = wx[i] * wyz
+                        dwx = gx[i] * wyz
+                        dwy = wx[i] * gyz
+                        dwz = wx[i] * wygz
                         px, py, pz = mvx, mvy, mvz
                         if affine:
-                            dx = lower[0] + h[0] * (ix + i) - x[p, 0]
-                            px += m * (C[p, 0, 0] * dx + C[p, 0, 1] * dy + C[p, 0, 2] * dz)
-                            py += m * (C[p, 1, 0] * dx + C[p, 1, 1] * dy + C[p, 1, 2] * dz)
-                            pz += m * (C[p, 2, 0] * dx + C[p, 2, 1] * dy + C[p, 2, 2] * dz)
+                            dx = (i - fx) * h[0]
+                            px += mc00 * dx + mc01 * dy + mc02 * dz
+                            py += mc10 * dx + mc11 * dy + mc12 * dz
+                            pz += mc20 * dx + mc21 * dy + mc22 * dz
                         gm[node] += w * m
                         gp[node, 0] += w * px
                         gp[node, 1] += w * py
                         gp[node, 2] += w * pz
-                        gf[node, 0] += w * max_ - s00 * dwx - s01 * dwy - s02 * dwz
-                        gf[node, 1] += w * may - s10 * dwx - s11 * dwy - s12 * dwz
-                        gf[node, 2] += w * maz - s20 * dwx - s21 * dwy - s22 * dwz
+                        if loaded:
+                            gf[node, 0] += w * max_ - s00 * dwx - s01 * dwy - s02 * dwz
+                            gf[node, 1] += w * may - s10 * dwx - s11 * dwy - s12 * dwz
+                            gf[node, 2] += w * maz - s20 * dwx - s21 * dwy - s22 * dwz
+                        else:
+                            gf[node, 0] -= s00 * dwx + s01 * dwy + s02 * dwz
+                            gf[node, 1] -= s10 * dwx + s11 * dwy + s12 * dwz
+                            gf[node, 2] -= s20 * dwx + s21 * dwy + s22 * dwz
     _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
@@ -211,7 +231,7 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
     L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.
     bad[t]: first particle of block t whose J = det F is not positive."""
     S = len(support)
-    mode, affine = len(variant[0]), len(variant[1]) == 1
+    mode, affine, blend = len(variant[0]), len(variant[1]) == 1, len(variant[2]) == 1
     threads = copies_mom.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
     d_inv0, d_inv1 = 4.0 * inv_h[0] * inv_h[0], 4.0 * inv_h[1] * inv_h[1]   # quadratic B-splines: D_p = h^2/4
@@ -222,13 +242,13 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
             gp[:, :] = 0.0
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
-            _, ix, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            _, iy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+            _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+            _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
             vpx = vpy = dvx = dvy = 0.0
             b00 = b01 = b10 = b11 = 0.0
             l00 = l01 = l10 = l11 = 0.0
             for j in range(S):
-                dy = lower[1] + h[1] * (iy + j) - x[p, 1]
+                dy = (j - fy) * h[1]
                 row = (iy + j) * strides[1] - offset
                 for i in range(S):
                     node = row + (ix + i) * strides[0]
@@ -244,10 +264,11 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                         continue
                     vpx += w * vx
                     vpy += w * vy
-                    dvx += w * (vx - v_old[node, 0])
-                    dvy += w * (vy - v_old[node, 1])
+                    if blend:
+                        dvx += w * (vx - v_old[node, 0])
+                        dvy += w * (vy - v_old[node, 1])
                     if affine:
-                        dx = lower[0] + h[0] * (ix + i) - x[p, 0]
+                        dx = (i - fx) * h[0]
                         b00 += vx * w * dx
                         b01 += vx * w * dy
                         b10 += vy * w * dx
@@ -260,8 +281,11 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                         l10 += vy * dwx
                         l11 += vy * dwy
             if mode != KINEMATICS:
-                v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
-                v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
+                if blend:
+                    v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
+                    v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
+                else:
+                    v[p, 0], v[p, 1] = vpx, vpy
                 if affine:
                     C[p, 0, 0], C[p, 0, 1] = b00 * d_inv0, b01 * d_inv1
                     C[p, 1, 0], C[p, 1, 1] = b10 * d_inv0, b11 * d_inv1
@@ -269,14 +293,14 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                 rate[p, 0], rate[p, 1] = vpx, vpy
                 m = mass[p]
                 for j in range(S):
-                    dy = lower[1] + h[1] * (iy + j) - x[p, 1]
+                    dy = (j - fy) * h[1]
                     row = (iy + j) * strides[1] - offset
                     for i in range(S):
                         node = row + (ix + i) * strides[0]
                         mw = m * (wx[i] * wy[j])
                         px, py = v[p, 0], v[p, 1]
                         if affine:
-                            dx = lower[0] + h[0] * (ix + i) - x[p, 0]
+                            dx = (i - fx) * h[0]
                             px += C[p, 0, 0] * dx + C[p, 0, 1] * dy
                             py += C[p, 1, 0] * dx + C[p, 1, 1] * dy
                         gp[node, 0] += mw * px
@@ -307,7 +331,7 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
            v_old, v_new, L, F, volume, volume0, rate, grid_mom, copies_mom, bad):
     """g2p_2d in 3D."""
     S = len(support)
-    mode, affine = len(variant[0]), len(variant[1]) == 1
+    mode, affine, blend = len(variant[0]), len(variant[1]) == 1, len(variant[2]) == 1
     threads = copies_mom.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
     d_inv0, d_inv1, d_inv2 = 4.0 * inv_h[0] * inv_h[0], 4.0 * inv_h[1] * inv_h[1], 4.0 * inv_h[2] * inv_h[2]
@@ -318,30 +342,32 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
             gp[:, :] = 0.0
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
-            _, ix, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            _, iy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            _, iz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
+            _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+            _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+            _, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
             vpx = vpy = vpz = dvx = dvy = dvz = 0.0
             b00 = b01 = b02 = b10 = b11 = b12 = b20 = b21 = b22 = 0.0
             l00 = l01 = l02 = l10 = l11 = l12 = l20 = l21 = l22 = 0.0
             for k in range(S):
-                dz = lower[2] + h[2] * (iz + k) - x[p, 2]
+                dz = (k - fz) * h[2]
                 for j in range(S):
-                    dy = lower[1] + h[1] * (iy + j) - x[p, 1]
+                    dy = (j - fy) * h[1]
                     row = (iy + j) * strides[1] + (iz + k) * strides[2] - offset
+                    wyz, gyz, wygz = wy[j] * wz[k], gy[j] * wz[k], wy[j] * gz[k]
                     for i in range(S):
                         node = row + (ix + i) * strides[0]
-                        w = wx[i] * wy[j] * wz[k]
+                        w = wx[i] * wyz
                         vx, vy, vz = v_new[node, 0], v_new[node, 1], v_new[node, 2]
                         if mode != KINEMATICS:
                             vpx += w * vx
                             vpy += w * vy
                             vpz += w * vz
-                            dvx += w * (vx - v_old[node, 0])
-                            dvy += w * (vy - v_old[node, 1])
-                            dvz += w * (vz - v_old[node, 2])
+                            if blend:
+                                dvx += w * (vx - v_old[node, 0])
+                                dvy += w * (vy - v_old[node, 1])
+                                dvz += w * (vz - v_old[node, 2])
                             if affine:
-                                dx = lower[0] + h[0] * (ix + i) - x[p, 0]
+                                dx = (i - fx) * h[0]
                                 b00 += vx * w * dx
                                 b01 += vx * w * dy
                                 b02 += vx * w * dz
@@ -352,9 +378,9 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                                 b21 += vz * w * dy
                                 b22 += vz * w * dz
                         if mode != REMAP:
-                            dwx = gx[i] * wy[j] * wz[k]
-                            dwy = wx[i] * gy[j] * wz[k]
-                            dwz = wx[i] * wy[j] * gz[k]
+                            dwx = gx[i] * wyz
+                            dwy = wx[i] * gyz
+                            dwz = wx[i] * wygz
                             l00 += vx * dwx
                             l01 += vx * dwy
                             l02 += vx * dwz
@@ -365,8 +391,11 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                             l21 += vz * dwy
                             l22 += vz * dwz
             if mode != KINEMATICS:
-                v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
-                v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
+                if blend:
+                    v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
+                    v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
+                else:
+                    v[p, 0], v[p, 1] = vpx, vpy
                 v[p, 2] = flip * (v[p, 2] + dvz) + (1.0 - flip) * vpz
                 if affine:
                     C[p, 0, 0], C[p, 0, 1], C[p, 0, 2] = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
@@ -376,16 +405,16 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                 rate[p, 0], rate[p, 1], rate[p, 2] = vpx, vpy, vpz
                 m = mass[p]
                 for k in range(S):
-                    dz = lower[2] + h[2] * (iz + k) - x[p, 2]
+                    dz = (k - fz) * h[2]
                     for j in range(S):
-                        dy = lower[1] + h[1] * (iy + j) - x[p, 1]
+                        dy = (j - fy) * h[1]
                         row = (iy + j) * strides[1] + (iz + k) * strides[2] - offset
                         for i in range(S):
                             node = row + (ix + i) * strides[0]
-                            mw = m * (wx[i] * wy[j] * wz[k])
+                            mw = m * (wx[i] * (wy[j] * wz[k]))
                             px, py, pz = v[p, 0], v[p, 1], v[p, 2]
                             if affine:
-                                dx = lower[0] + h[0] * (ix + i) - x[p, 0]
+                                dx = (i - fx) * h[0]
                                 px += C[p, 0, 0] * dx + C[p, 0, 1] * dy + C[p, 0, 2] * dz
                                 py += C[p, 1, 0] * dx + C[p, 1, 1] * dy + C[p, 1, 2] * dz
                                 pz += C[p, 2, 0] * dx + C[p, 2, 1] * dy + C[p, 2, 2] * dz

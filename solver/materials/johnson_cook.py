@@ -58,7 +58,9 @@ def homologous_temperature(prm, T):
 def flow_stress(prm, eps_p, rate_ratio, t_star):
     """Johnson-Cook flow stress without the damage factor."""
     hardening = prm[A] + prm[B] * eps_p ** prm[N] if eps_p > 0.0 else prm[A]
-    return hardening * (1.0 + prm[C] * math.log(max(rate_ratio, 1.0))) * (1.0 - t_star ** prm[M])
+    rate = 1.0 + prm[C] * math.log(rate_ratio) if rate_ratio > 1.0 else 1.0
+    thermal = 1.0 - t_star ** prm[M] if t_star > 0.0 else 1.0   # (no pow at room temperature)
+    return hardening * rate * thermal
 
 
 @njit(cache=True)
@@ -102,7 +104,7 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm
     for t in prange(threads):
         fastest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, mass, volume, eps_p, eps_rate, T, dmg,
                                    d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm, scratch[t])
-    return fastest.max()
+    return math.sqrt(fastest.max())
 
 
 @njit(cache=True)
@@ -154,10 +156,8 @@ def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_in
                 dmg[p] = max(dmg[p], d_new)
         objective.assemble(s, pressure, stress[p])
 
-        c = math.sqrt((eos.bulk_tangent(eos_prm, mu) + 4.0 / 3.0 * g) / rho)
-        if c > fastest:
-            fastest = c
-    return fastest
+        fastest = max(fastest, (eos.bulk_tangent(eos_prm, mu) + 4.0 / 3.0 * g) / rho)
+    return fastest   # squared: one square root for all particles
 
 
 @njit(cache=True)
