@@ -64,16 +64,17 @@ def _print_scene_errors(source: str, error) -> None:
         print(f"{item['path'] or '(scene)'}: {item['message']}", file=sys.stderr)
 
 
-def _load(path: str | dict, processes: int | None = None):
+def _load(path: str | dict, processes: int | None = None, threads: int | None = None):
     """The validated scene of a file (or a scene document), with ``parallel.processes``
-    overridden; None after printing errors."""
+    and ``parallel.threads`` overridden where given; None after printing errors."""
     from solver.scene import SceneError, load_scene
 
     try:
         scene = load_scene(path if isinstance(path, dict) else Path(path))
-        if processes is not None:
+        given = {k: v for k, v in (("processes", processes), ("threads", threads)) if v is not None}
+        if given:
             data = scene.model_dump(mode="json")
-            data["parallel"] = {**(data.get("parallel") or {}), "processes": processes}
+            data["parallel"] = {**(data.get("parallel") or {}), **given}
             scene = load_scene(data)
     except SceneError as error:
         _print_scene_errors("the checkpoint's scene" if isinstance(path, dict) else path, error)
@@ -112,6 +113,8 @@ def register_run(subparsers) -> None:
     parser.add_argument("-o", "--output", metavar="DIR", help="output folder (default: out/<scene file name>)")
     parser.add_argument("-n", "--processes", type=_positive_int, metavar="K",
                         help="processes to run on (sets parallel.processes)")
+    parser.add_argument("-t", "--threads", type=_positive_int, metavar="T",
+                        help="threads per process (sets parallel.threads; default: the cores, shared)")
     parser.add_argument("--resume", metavar="DIR",
                         help="continue the run in DIR from its checkpoint (from the start when it has none)")
     parser.add_argument("--checkpoint-seconds", type=float, metavar="S",
@@ -142,7 +145,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"mpm run: error: {error}", file=sys.stderr)
         return EXIT_ERROR
-    scene = _load(scene_source, args.processes)
+    scene = _load(scene_source, args.processes, args.threads)
     if scene is None:
         return EXIT_INVALID
     from solver import parallel
@@ -197,6 +200,7 @@ def _exec_processes(processes: int, args: argparse.Namespace) -> None:
     given += ["-o", args.output] if args.output else []
     given += ["--resume", args.resume] if args.resume else []
     given += ["--checkpoint-seconds", repr(args.checkpoint_seconds)] if args.checkpoint_seconds else []
+    given += ["-t", str(args.threads)] if args.threads else []
     command = launch.command(processes, ["run", *given, "-n", str(processes), "--progress", args.progress])
     sys.stdout.flush()
     sys.stderr.flush()

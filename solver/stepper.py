@@ -72,15 +72,6 @@ class ExplicitMPM:
         self.external_work = 0.0
         self.boundary_work = 0.0
         self._acceleration = None   # the body acceleration of the last step
-        # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
-        self.domain = parallel.decompose(scene, self.shape.SUPPORT)
-        self.domain.distribute(self.particles)
-        self.place()
-        # (one process only, for now: validation keeps rigid bodies and axisymmetry off several)
-        self.axisymmetry = Axisymmetry(self.particles, self.grid) if scene.axisymmetric else None
-        self.rigid = RigidBodies(scene, self.particles, self.grid)
-        masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
-        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
         # The common scenes take the fused kernels (solver/fused.py): the same algorithm, the
         # same answer to round-off, without storing the stencil. `fused` False forces the general
         # kernels (the tests compare the two).
@@ -90,11 +81,21 @@ class ExplicitMPM:
             self._support = fused.support_spec(method.shape_function)
         else:
             self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
+        # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
+        self.domain = parallel.decompose(scene, self.shape.SUPPORT)
+        self.domain.distribute(self.particles)
+        self.place()
+        # (one process only, for now: validation keeps rigid bodies and axisymmetry off several)
+        self.axisymmetry = Axisymmetry(self.particles, self.grid) if scene.axisymmetric else None
+        self.rigid = RigidBodies(scene, self.particles, self.grid)
+        masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
+        self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
 
     def use_general_kernels(self) -> None:
         """Step with the general (stored-stencil) kernels even where fused ones apply."""
         self.fused = False
         self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[self.scene.method.scheme]
+        self._place_particles()
 
     # -- the step ---------------------------------------------------------------
 
@@ -129,8 +130,11 @@ class ExplicitMPM:
 
     def _place_particles(self) -> None:
         """Per-particle work arrays and material slices for the particles held here."""
-        self.stencil = make_stencil(self.particles.count, self.scene.dimension, self.shape.SUPPORT)
-        self.rate = np.zeros_like(self.particles.x)   # fused MUSL: v_pic between the remap and the move
+        # The general kernels store each particle's stencil; the fused ones recompute it and
+        # keep only v_pic between MUSL's remap and its move.
+        n, dim = self.particles.count, self.scene.dimension
+        self.stencil = None if self.fused else make_stencil(n, dim, self.shape.SUPPORT)
+        self.rate = np.zeros((n, dim)) if self.fused else None
         slices = material_slices(self.scene, self.particles.body)
         self.materials = [(self._model_of[name], sl) for name, sl in slices.items()]
 

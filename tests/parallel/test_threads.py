@@ -9,11 +9,16 @@ process counts. One run combines both: 2 processes of 2 threads each.
 """
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+
 import numba
 import numpy as np
 import pytest
 
 from ranks import SCENE_2D, SCENE_3D, last_frame, relative_difference, run_cli, scene
+from solver.results import read_scene
 from solver.scene import load_scene
 from solver.stepper import ExplicitMPM
 
@@ -62,3 +67,15 @@ def test_two_processes_of_two_threads_give_the_single_process_particles(tmp_path
     assert runs[1]["step"] == runs[2]["step"] == STEPS
     for field in ("position", "velocity", "stress"):
         assert relative_difference(runs[1]["fields"][field], runs[2]["fields"][field]) <= TOLERANCE, field
+
+
+def test_mpm_run_threads_option_sets_the_scenes_threads(tmp_path):
+    case = scene(CASES["2d-musl-linear-flip"], time={"end": 0.005, "dt": 0.001})
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(case))
+    done = subprocess.run([sys.executable, "-m", "solver", "run", str(path), "-o", str(tmp_path / "out"), "-t", "2",
+                           "--progress", "none"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert read_scene(tmp_path / "out" / "result.h5")["parallel"]["threads"] == 2
+    bad = subprocess.run([sys.executable, "-m", "solver", "run", str(path), "-t", "0"], capture_output=True, text=True)
+    assert bad.returncode != 0 and "must be >= 1" in bad.stderr
