@@ -167,16 +167,14 @@ class RigidBodies:
         nodes, bodies, first = self._buffers
         count = mark_nodes(spec, index, particles.x, particles.body, self._lower, self._inv_h, self._cells,
                            self._strides, self._node_body, nodes, bodies, first)
-        self._marked = self._nodes = nodes[:count]
-        self._bodies = bodies[:count]
-        if self.domain.processes > 1:
-            self._nodes, self._bodies = self._owned_marks(self._nodes, self._bodies, particles.id[first[:count]])
+        self._marked = nodes[:count]
+        self._nodes, self._bodies = self._owned_marks(self._marked, bodies[:count], particles.id[first[:count]])
         self._start = particles.x[index]
 
     def _owned_marks(self, nodes, bodies, ids):
         """The marks on nodes owned here, in local numbers, with those other processes made on
         them; where several reach a node, the mark of the lowest particle id wins (as in one
-        process, which holds its particles in id order)."""
+        process, which holds its particles in id order). One process: the marks as they are."""
         d = self.domain
         local = d.owned_local(nodes)
         here = local >= 0
