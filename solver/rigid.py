@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from solver.expressions import compile_expression
+from solver.state import grid_geometry
 
 AXES = "xyz"
 
@@ -123,12 +124,8 @@ class RigidBodies:
         if not self.any:
             return
         particles.mass[self.is_rigid[particles.body]] = 0.0   # boundary conditions, not bodies
-        # the whole grid, as make_grid places it (one process: the grid itself)
-        h = np.asarray(scene.cell_sizes(), dtype=np.float64)
-        cells = np.asarray(scene.grid_shape(), dtype=np.int64)
-        self._lower, self._inv_h, self._cells = np.asarray(scene.grid_lower(), dtype=np.float64), 1.0 / h, cells
-        self._strides = np.concatenate(([1], np.cumprod(cells + 1)[:-1])).astype(np.int64)
-        self._node_body = np.full(int(np.prod(cells + 1)), -1, dtype=np.int64)
+        self._whole = grid_geometry(scene)   # one process: its grid
+        self._node_body = np.full(self._whole.n_nodes, -1, dtype=np.int64)
         self._marked = np.zeros(0, dtype=np.int64)     # whole-grid numbers marked in _node_body
         self._nodes = np.zeros(0, dtype=np.int64)      # nodes to impose on, numbered on this process's grid
         self._bodies = np.zeros(0, dtype=np.int64)     # and the body of each
@@ -165,8 +162,9 @@ class RigidBodies:
         self._node_body[self._marked] = -1
         index = self._rigid_index(particles)
         nodes, bodies, first = self._buffers
-        count = mark_nodes(spec, index, particles.x, particles.body, self._lower, self._inv_h, self._cells,
-                           self._strides, self._node_body, nodes, bodies, first)
+        w = self._whole
+        count = mark_nodes(spec, index, particles.x, particles.body, w.lower, w.inv_h, w.cells, w.strides,
+                           self._node_body, nodes, bodies, first)
         self._marked = nodes[:count]
         self._nodes, self._bodies = self._owned_marks(self._marked, bodies[:count], particles.id[first[:count]])
         self._start = particles.x[index]

@@ -34,7 +34,7 @@ from solver.parallel.binning import bin_particles, owners
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED, UNCHANGED
 from solver.parallel.slabs import balanced_cuts, even_cuts, layers_of, local_nodes, overlap, owned_nodes, split_axis
 from solver.results import ResultWriter
-from solver.state import Grid, material_of_body
+from solver.state import Grid, grid_geometry, material_of_body
 
 HALO_TAG = 17
 
@@ -51,6 +51,7 @@ class SlabDomain:
         self.h = np.asarray(scene.cell_sizes(), dtype=np.float64)
         self.axis = split_axis(self.cells)
         self._inv_h = 1.0 / self.h   # as Grid computes it
+        self._whole_strides = _strides(self.cells + 1)
         self.rebalance_every = scene.parallel.rebalance_every
         self._by_reference = scene.method.formulation == "tlmpm"   # slabs of the reference configuration
         self.cuts = even_cuts(int(self.cells[self.axis]), self.processes)
@@ -91,9 +92,7 @@ class SlabDomain:
                     force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)))
 
     def constraints(self, scene, grid: Grid) -> "_OwnedConstraints":
-        empty = np.zeros((0, self.dimension))
-        whole = Grid(lower=self.lower, h=self.h, cells=self.cells, mass=np.zeros(0), momentum=empty,
-                     force=empty, v_old=empty, v_new=empty)
+        whole = grid_geometry(scene)
         return _OwnedConstraints(Constraints(scene, whole), whole, owned_nodes(self.cuts, self.rank),
                                  self.local[0], self.axis, grid.strides)
 
@@ -187,7 +186,7 @@ class SlabDomain:
     def owned_local(self, nodes: np.ndarray) -> np.ndarray:
         """Whole-grid node numbers -> local node numbers of those this process owns, -1 for the others."""
         counts = self.cells + 1
-        coords = (nodes[:, None] // _strides(counts)[None, :]) % counts[None, :]
+        coords = (nodes[:, None] // self._whole_strides[None, :]) % counts[None, :]
         lo, hi = owned_nodes(self.cuts, self.rank)
         mine = (coords[:, self.axis] >= lo) & (coords[:, self.axis] < hi)
         coords[:, self.axis] -= self.local[0]
