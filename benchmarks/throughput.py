@@ -1,19 +1,35 @@
-"""Solver throughput in particle-steps per second, against a hand-fused reference.
+"""Solver throughput in particle-steps per second, side by side with numba, Taichi and Warp.
 
-    python benchmarks/throughput.py            # the table of docs/benchmarks.md
-    python benchmarks/throughput.py --quick    # smaller problems, fewer steps
+    python benchmarks/throughput.py                  # the tables of docs/benchmarks.md
+    python benchmarks/throughput.py --quick          # smaller problems, fewer steps
+    python benchmarks/throughput.py --frameworks-python /path/to/python   # where taichi and warp-lang are
 
-Each case is an elastic block (linear shape functions, MUSL, FLIP, one thread).
-The reference is the same 2D step written as one fused numba function with
-every loop unrolled by hand (benchmarks/reference_mpm2d.py): the ceiling for
-this algorithm on this machine. Both run alternately in the same process, so
-the ratio holds on a busy, shared machine where absolute numbers do not.
-It also measures the start-up of `python -m solver run` with a warm compile cache.
+Part 1, the side-by-side comparison of issue 9. One elastic block (80 % of the unit
+grid, 2 particles per cell per axis, moving and straining), the same step for all:
+quadratic B-splines, APIC, neo-Hookean, float64, at ~32k and ~130k particles in 2D
+and ~130k and ~260k in 3D, at 1 and 2 threads:
+
+- this solver's full step (USL, APIC; the fused kernels of solver/fused.py, with
+  boundary conditions, energy accounting and every check a run makes);
+- the same scene on the solver's general kernels (stored stencils, serial P2G);
+- a minimal hand-written numba MLS-MPM step (benchmarks/reference_mls.py);
+- Taichi on its CPU backend and NVIDIA Warp on its CPU device
+  (benchmarks/frameworks/), each in its own process.
+
+The solver and the numba reference alternate in one process (best of three), so
+their ratio holds on a busy machine where absolute numbers do not; the Taichi
+and Warp processes run right after, in the same invocation. Taichi and Warp are
+not dependencies of the project: `pip install taichi warp-lang` (or the project's
+`bench` extra) into the interpreter given by --frameworks-python.
+
+Part 2, the solver's own ceiling: linear shape functions, MUSL, FLIP against the
+hand-fused 2D step of benchmarks/reference_mpm2d.py, and the start-up time.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -26,6 +42,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from reference_mls import ReferenceMLS  # noqa: E402
 from reference_mpm2d import ReferenceMPM2D  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
@@ -49,15 +66,75 @@ def block_scene(dim: int, cells_per_axis: int) -> dict:
     }
 
 
-def rate(stepper, n_particles: int, steps: int) -> float:
+FRAMEWORKS = Path(__file__).resolve().parent / "frameworks"
+MLS_DT = 1e-5
+
+
+def mls_block_scene(dim: int, cells: int, threads: int) -> dict:
+    """The block of the side-by-side comparison: the step every implementation runs."""
+    scene = block_scene(dim, cells)
+    scene["method"] = {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": "apic"}
+    scene["materials"]["m"]["model"] = "neo_hookean"
+    scene["time"]["dt"] = MLS_DT
+    scene["parallel"] = {"threads": threads}
+    return scene
+
+
+def _framework(script: str, args: list[str], python: str, threads: int) -> dict:
+    env = {**os.environ, "OMP_NUM_THREADS": str(threads)}
+    done = subprocess.run([python, str(FRAMEWORKS / script), *args], capture_output=True, text=True, env=env,
+                          timeout=1800)
+    if done.returncode != 0:
+        tail = done.stderr.strip().splitlines()[-1:] or ["(no output)"]
+        raise SystemExit(f"{script} failed with {python}: {tail[0]}\n"
+                         f"install the frameworks there: {python} -m pip install taichi warp-lang")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, warp_rate: dict) -> dict:
+    """Particle-steps/s of the five implementations of one block at one thread count."""
+    import numba
+
+    sim = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
+    general = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
+    general.use_general_kernels()
+    p = sim.particles
+    start_x, start_v = p.x.copy(), p.v.copy()    # for Taichi and Warp, before the solver moves them
+    model = sim.materials[0][0]
+    reference = ReferenceMLS(p.x, p.v, p.mass, p.volume, cells, model.lam, model.mu, threads)
+    n = p.count
+    contenders = {"solver": sim, "general": general, "numba": reference}
+    best = {name: 0.0 for name in contenders}
+    for name, stepper in contenders.items():     # compile, and set the thread count each uses
+        numba.set_num_threads(threads)
+        stepper.advance(MLS_DT)
+    for _ in range(3):
+        for name, stepper in contenders.items():
+            numba.set_num_threads(threads)
+            measured = rate(stepper, n, steps if name != "general" else max(2, steps // 4), MLS_DT)
+            best[name] = max(best[name], measured)
+    with tempfile.TemporaryDirectory() as tmp:
+        block = Path(tmp) / "block.npz"
+        np.savez(block, x=start_x, v=start_v, mass=p.mass, volume=p.volume, cells=cells, lam=model.lam,
+                 mu=model.mu, dt=MLS_DT)
+        best["taichi"] = _framework("mls_taichi.py", [str(block), str(threads), str(steps)], python, threads)["rate"]
+        if (dim, cells) not in warp_rate:          # Warp's CPU device runs on one thread
+            warp_rate[(dim, cells)] = _framework("mls_warp.py", [str(block), str(steps)], python, 1)["rate"]
+        best["warp"] = warp_rate[(dim, cells)]
+    return {"dimension": dim, "particles": n, "threads": threads, **best}
+
+
+def rate(stepper, n_particles: int, steps: int, dt: float = DT) -> float:
     start = time.perf_counter()
     for _ in range(steps):
-        stepper.advance(DT)
+        stepper.advance(dt)
     return n_particles * steps / (time.perf_counter() - start)
 
 
 def measure(dim: int, cells: int, steps: int, repeats: int) -> dict:
-    sim = ExplicitMPM(load_scene(block_scene(dim, cells)))
+    scene = block_scene(dim, cells)
+    scene["parallel"] = {"threads": 1}
+    sim = ExplicitMPM(load_scene(scene))
     n = sim.particles.count
     sim.advance(DT)                       # compile (or load from cache)
     ours = []
@@ -94,29 +171,55 @@ def startup_seconds() -> float:
         return time.perf_counter() - start
 
 
+def print_side_by_side(rows: list[dict]) -> None:
+    print("part 1: the same elastic-block step (quadratic B-splines, APIC, neo-Hookean, float64), "
+          "M particle-steps/s")
+    head = ("case", "particles", "threads", "solver", "general", "numba MLS", "Taichi", "Warp (1 thr.)",
+            "/numba", "/Taichi", "/Warp")
+    print("".join(f"{h:>14}" for h in head))
+    for r in rows:
+        cells = (f"{r['dimension']}D block", f"{r['particles']:,}", r["threads"], *(f"{r[k] / 1e6:.2f}" for k in
+                 ("solver", "general", "numba", "taichi", "warp")),
+                 *(f"{r['solver'] / r[k]:.2f}" for k in ("numba", "taichi", "warp")))
+        print("".join(f"{c:>14}" for c in cells))
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="small problems, for a smoke run")
     parser.add_argument("--json", type=Path, help="also write the rows as JSON")
+    parser.add_argument("--frameworks-python", default=sys.executable,
+                        help="the Python that has taichi and warp-lang (default: this one)")
+    parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--skip-part2", action="store_true")
     args = parser.parse_args()
     if args.quick:
+        blocks = [(2, 56, 20), (3, 16, 5)]
         cases = [(2, 56, 20), (3, 14, 10)]
         repeats = 2
     else:
-        # ~32k and ~130k particles in 2D (cells^2 * 0.64 * 4), ~130k in 3D (cells^3 * 0.512 * 8)
+        # 2D: cells^2 * 0.64 * 4 particles (32,400 and 129,600); 3D: cells^3 * 0.512 * 8 (140,608 and 262,144)
+        blocks = [(2, 112, 60), (2, 225, 15), (3, 32, 6), (3, 40, 4)]
         cases = [(2, 112, 100), (2, 225, 40), (3, 32, 20)]
         repeats = 3
-    rows = [measure(dim, cells, steps, repeats) for dim, cells, steps in cases]
-    print(f"{'case':<10}{'particles':>11}{'nodes':>10}{'solver Mp-steps/s':>20}{'reference':>12}{'ratio':>8}")
-    for r in rows:
-        ref = f"{r['reference'] / 1e6:12.2f}" if "reference" in r else f"{'-':>12}"
-        ratio = f"{r['ratio']:8.2f}" if "ratio" in r else f"{'-':>8}"
-        print(f"{str(r['dimension']) + 'D block':<10}{r['particles']:>11,}{r['grid_nodes']:>10,}"
-              f"{r['solver'] / 1e6:20.2f}{ref}{ratio}")
-    start = startup_seconds()
-    print(f"start-up to the end of the first step, warm cache: {start:.2f} s")
+    warp_rate: dict = {}
+    side = [side_by_side(dim, cells, threads, steps, args.frameworks_python, warp_rate)
+            for dim, cells, steps in blocks for threads in args.threads]
+    print_side_by_side(side)
+    rows, start = [], None
+    if not args.skip_part2:
+        rows = [measure(dim, cells, steps, repeats) for dim, cells, steps in cases]
+        print("\npart 2: linear hat functions, MUSL, FLIP, one thread, against the hand-fused 2D step")
+        print(f"{'case':<10}{'particles':>11}{'nodes':>10}{'solver Mp-steps/s':>20}{'reference':>12}{'ratio':>8}")
+        for r in rows:
+            ref = f"{r['reference'] / 1e6:12.2f}" if "reference" in r else f"{'-':>12}"
+            ratio = f"{r['ratio']:8.2f}" if "ratio" in r else f"{'-':>8}"
+            print(f"{str(r['dimension']) + 'D block':<10}{r['particles']:>11,}{r['grid_nodes']:>10,}"
+                  f"{r['solver'] / 1e6:20.2f}{ref}{ratio}")
+        start = startup_seconds()
+        print(f"start-up to the end of the first step, warm cache: {start:.2f} s")
     if args.json:
-        args.json.write_text(json.dumps({"rows": rows, "startup_seconds": start}, indent=2))
+        args.json.write_text(json.dumps({"side_by_side": side, "rows": rows, "startup_seconds": start}, indent=2))
     return 0
 
 

@@ -589,6 +589,8 @@ class Parallel(_Model):
     processes: Annotated[int, Strict(), Field(ge=1)] = 1  # a request; the service may cap it
     # slabs are balanced by particle counts at the start and every N steps; 0: even slabs, never moved
     rebalance_every: Annotated[int, Strict(), Field(ge=0)] = 100
+    # threads per process (solver/threads.py); 0: the cores this machine gives the run, shared among its processes
+    threads: Annotated[int, Strict(), Field(ge=0, le=1024)] = 0
 
     @field_validator("processes")
     @classmethod

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from solver import kernels, parallel, shape
+from solver import fused, kernels, parallel, shape, threads
 from solver.axisymmetric import Axisymmetry
 from solver.loads import BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
@@ -54,6 +54,7 @@ class ExplicitMPM:
     def __init__(self, scene):
         self.scene = scene
         method = scene.method
+        self.threads = threads.configure(scene)
         self.particles, slices = make_particles(scene)
         # Every process seeded every particle: the models are made (and their particles'
         # state started) once, here, and reused whatever particles a process holds later.
@@ -79,7 +80,20 @@ class ExplicitMPM:
         self.place()
         masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
-        self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
+        # The common scenes take the fused kernels (solver/fused.py): the same algorithm, the
+        # same answer to round-off, without storing the stencil. `fused` False forces the general
+        # kernels (the tests compare the two).
+        self.fused = fused.applies(scene) and type(self) is ExplicitMPM
+        if self.fused:
+            self._step = {"usl": self._step_usl_fused, "musl": self._step_musl_fused}[method.scheme]
+            self._support = fused.support_spec(method.shape_function)
+        else:
+            self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
+
+    def use_general_kernels(self) -> None:
+        """Step with the general (stored-stencil) kernels even where fused ones apply."""
+        self.fused = False
+        self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[self.scene.method.scheme]
 
     # -- the step ---------------------------------------------------------------
 
@@ -106,15 +120,18 @@ class ExplicitMPM:
 
     def _place_grid(self) -> None:
         self.grid = self.domain.grid(self.scene)
+        self.frame = self.domain.frame(self.grid)
         self.constraints = self.domain.constraints(self.scene, self.grid)
         if self.axisymmetry is not None:
             self.axisymmetry.place(self.grid, self.domain.first_node(0))   # radii from whole-grid node layers
+        self.copies = threads.ScatterCopies(self.grid.n_nodes, self.scene.dimension, self.threads)
         # APIC: PIC velocities plus the affine matrix C_p (solver/transfer.py)
         self.affine = AffineTransfer(self.particles, self.grid) if self.scene.method.transfer == "apic" else None
 
     def _place_particles(self) -> None:
         """Per-particle work arrays and material slices for the particles held here."""
         self.stencil = make_stencil(self.particles.count, self.scene.dimension, self.shape.SUPPORT)
+        self.rate = np.zeros_like(self.particles.x)   # fused MUSL: v_pic between the remap and the move
         slices = material_slices(self.scene, self.particles.body)
         self.materials = [(self._model_of[name], sl) for name, sl in slices.items()]
 
@@ -184,7 +201,66 @@ class ExplicitMPM:
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
 
+    def _step_usl_fused(self, dt: float) -> None:
+        g, halo = self.grid, self.domain
+        g.reset()
+        self._fused_p2g()                                               # m_I, (mv)_I, f_I
+        halo.sum_ghosts(g.mass, g.momentum, g.force)
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
+        self._impose(g.v_old)
+        self.boundary_work += self._impose(g.v_new, record=True)
+        halo.share_nodes(g.v_old, g.v_new)
+        self._fused_g2p(dt, fused.USL)                                  # v_p, x_p, then L_p, F_p, V_p
+        self._update_materials(dt)
+
+    def _step_musl_fused(self, dt: float) -> None:
+        g, halo = self.grid, self.domain
+        g.reset()
+        self._fused_p2g()                                               # lines 8-12
+        halo.sum_ghosts(g.mass, g.momentum, g.force)
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
+        self._impose(g.v_old)                                           # lines 14-17
+        self.boundary_work += self._impose(g.v_new, record=True)
+        halo.share_nodes(g.v_old, g.v_new)
+        g.momentum.fill(0.0)
+        self._fused_g2p(dt, fused.REMAP)                                # lines 18-20: v_p, (mv)_I again
+        halo.sum_ghosts(g.momentum)
+        kernels.nodal_velocity(g.mass, g.momentum, g.v_new)             # line 24
+        self._impose(g.v_new)                                           # line 21
+        halo.share_nodes(g.v_new)
+        self._fused_g2p(dt, fused.KINEMATICS)                           # lines 25-27: L, F, V; x_p
+        self._update_materials(dt)                                      # line 28
+
     # -- phases -----------------------------------------------------------------
+
+    def _fused_p2g(self) -> None:
+        p, g, f, c = self.particles, self.grid, self.frame, self.copies
+        acc = self._acceleration = self.loads.acceleration(p, self.time)
+        kernel = fused.p2g_2d if self.scene.dimension == 2 else fused.p2g_3d
+        bad = np.empty(self.threads, dtype=np.int64)
+        kernel(self._support, fused.variant_spec(0, self.affine is not None), p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
+               acc, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset,
+               g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+        outside = fused.first(bad)
+        if outside >= 0:
+            self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _fused_g2p(self, dt: float, mode: int) -> None:
+        p, g, f = self.particles, self.grid, self.frame
+        kernel = fused.g2p_2d if self.scene.dimension == 2 else fused.g2p_3d
+        bad = np.empty(self.threads, dtype=np.int64)
+        kernel(self._support, fused.variant_spec(mode, self.affine is not None), p.x, p.v, self._affine_matrix,
+               self.flip_ratio, dt,
+               p.mass, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset, g.v_old, g.v_new, p.L, p.F,
+               p.volume, p.volume0, self.rate, g.momentum, self.copies.momentum, bad)
+        self._check_inversion(fused.first(bad))
+
+    @property
+    def _affine_matrix(self) -> np.ndarray:
+        """C_p for APIC; a placeholder of the right type for the kernels otherwise."""
+        if self.affine is not None:
+            return self.particles.extra["affine"]
+        return np.zeros((1, self.scene.dimension, self.scene.dimension))
 
     def _interpolation_weights(self) -> None:
         p, g, s = self.particles, self.grid, self.stencil
@@ -215,14 +291,20 @@ class ExplicitMPM:
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil
-        inverted = kernels.update_kinematics(self.spec, s.idx, s.dw, v_grid, dt, p.L, p.F, p.volume, p.volume0)
-        if inverted >= 0:
-            J = float(np.linalg.det(p.F[inverted]))
-            self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")
+        self._check_inversion(kernels.update_kinematics(self.spec, s.idx, s.dw, v_grid, dt, p.L, p.F,
+                                                        p.volume, p.volume0))
         if self.axisymmetry is not None:
             self.axisymmetry.kinematics(self.spec, s, p, v_grid, dt)
+        self._update_materials(dt)
+
+    def _check_inversion(self, inverted: int) -> None:
+        if inverted >= 0:
+            J = float(np.linalg.det(self.particles.F[inverted]))
+            self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")
+
+    def _update_materials(self, dt: float) -> None:
         for material, sl in self.materials:
-            material.update_stress(p, sl, dt)
+            material.update_stress(self.particles, sl, dt)
 
     def _account_external_work(self, dt: float) -> None:
         """Work of the body acceleration the step applied (not evaluated again), with the new velocities."""

@@ -20,21 +20,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def _update(L, volume, volume0, stress, rho0, K, gamma, mu, min_pressure):
     """Stress of every particle; returns the largest sound speed."""
     n, dim = L.shape[0], L.shape[1]
     c2_max = 0.0
-    for p in range(n):
+    for p in prange(n):
         ratio = volume0[p] / volume[p]                  # rho / rho0 = 1 / J
         stiff = ratio**gamma
         pressure = max(K * (stiff - 1.0), min_pressure)
-        c2 = K * gamma * stiff / (ratio * rho0)
-        if c2 > c2_max:
-            c2_max = c2
+        c2_max = max(c2_max, K * gamma * stiff / (ratio * rho0))   # (a max reduction over threads)
         tr = 0.0
         for a in range(dim):
             tr += L[p, a, a]

@@ -27,19 +27,32 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver.kernels import determinant
+from solver.threads import block_bounds
+
+
+@njit(parallel=True, cache=True)
+def _update(L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_linear, threads):
+    """Internal energy and stress of every particle; returns the largest sound speed."""
+    n, dim = L.shape[0], L.shape[1]
+    bounds = block_bounds(n, threads)
+    scratch = np.empty((threads, dim, dim))   # one per thread: allocated here, not hoisted by numba
+    c2_block = np.zeros(threads)
+    for t in prange(threads):
+        c2_block[t] = _update_block(bounds[t], bounds[t + 1], L, mass, volume, energy, stress, dt, gamma, cell,
+                                    c_quadratic, c_linear, scratch[t])
+    return math.sqrt(c2_block.max())
 
 
 @njit(cache=True)
-def _update(L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_linear):
-    """Internal energy and stress of every particle; returns the largest sound speed."""
-    n, dim = L.shape[0], L.shape[1]
-    step = np.empty((dim, dim))
+def _update_block(lo, hi, L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_linear, step):
+    dim = L.shape[1]
     c2_max = 0.0
-    for p in range(n):
+    for p in range(lo, hi):
         tr = 0.0
         for a in range(dim):
             tr += L[p, a, a]
@@ -62,7 +75,7 @@ def _update(L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_lin
         for a in range(3):
             for b in range(3):
                 stress[p, a, b] = -(pressure + q) if a == b else 0.0
-    return math.sqrt(c2_max)
+    return c2_max
 
 
 class IdealGas:
@@ -89,7 +102,7 @@ class IdealGas:
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         self.wave_speed = _update(particles.L[sl], particles.mass[sl], particles.volume[sl],
                                   particles.extra["internal_energy"][sl], particles.stress[sl], dt,
-                                  self.gamma, self.cell, self.c_quadratic, self.c_linear)
+                                  self.gamma, self.cell, self.c_quadratic, self.c_linear, numba.get_num_threads())
 
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         """The internal energy m e: what the gas stores and gives back as kinetic energy."""

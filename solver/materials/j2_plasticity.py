@@ -14,21 +14,27 @@ E_t = E H / (E + H). Per particle it keeps the equivalent plastic strain
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver.materials import objective
 from solver.materials.linear_elastic import LinearElastic
+from solver.threads import block_bounds
+
+
+@njit(parallel=True, cache=True)
+def _update(L, stress, eps_p, dt, K, G, yield_stress, H, threads):
+    bounds = block_bounds(L.shape[0], threads)
+    scratch = np.empty((threads, 5, 3, 3))   # D, W, Q, tmp, s of each thread
+    for t in prange(threads):
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, dt, K, G, yield_stress, H, scratch[t])
 
 
 @njit(cache=True)
-def _update(L, stress, eps_p, dt, K, G, yield_stress, H):
-    D = np.empty((3, 3))
-    W = np.empty((3, 3))
-    Q = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    s = np.empty((3, 3))
-    for p in range(L.shape[0]):
+def _update_block(lo, hi, L, stress, eps_p, dt, K, G, yield_stress, H, scratch):
+    D, W, Q, tmp, s = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
+    for p in range(lo, hi):
         objective.rate_tensors(L[p], D, W)
         objective.rotate(stress[p], W, dt, Q, tmp)
         pressure = objective.split(stress[p], s)
@@ -60,4 +66,4 @@ class J2Plasticity(LinearElastic):
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
-                dt, self.bulk, self.mu, self.yield_stress, self.hardening)
+                dt, self.bulk, self.mu, self.yield_stress, self.hardening, numba.get_num_threads())

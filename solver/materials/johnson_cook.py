@@ -35,12 +35,14 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver.materials import damage as damage_model
 from solver.materials import eos, objective
 from solver.materials.elastic import IsotropicElastic
+from solver.threads import block_bounds
 
 # Layout of the flow-stress parameter array.
 A, B, N, C, RATE0, M, T_ROOM, T_MELT, CHI, CP, RHO0 = range(11)
@@ -90,18 +92,27 @@ def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor, guess):
     return x
 
 
-@njit(cache=True)
-def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm):
+@njit(parallel=True, cache=True)
+def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm,
+            threads):
     """Update the particles' stress and state; returns the largest wave speed (K_t + 4/3 G') / rho."""
-    D = np.empty((3, 3))
-    W = np.empty((3, 3))
-    Q = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    s = np.empty((3, 3))
+    bounds = block_bounds(L.shape[0], threads)
+    scratch = np.empty((threads, 5, 3, 3))   # D, W, Q, tmp, s of each thread
+    fastest = np.zeros(threads)
+    for t in prange(threads):
+        fastest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, mass, volume, eps_p, eps_rate, T, dmg,
+                                   d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm, scratch[t])
+    return fastest.max()
+
+
+@njit(cache=True)
+def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
+                  fail_prm, scratch):
+    D, W, Q, tmp, s = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
     damaged = dmg.shape[0] > 0
     accumulates = d_init.shape[0] > 0
     fastest = 0.0
-    for p in range(L.shape[0]):
+    for p in range(lo, hi):
         objective.rate_tensors(L[p], D, W)
         objective.rotate(stress[p], W, dt, Q, tmp)
         objective.split(stress[p], s)
@@ -205,7 +216,7 @@ class JohnsonCook(IsotropicElastic):
                           particles.mass[sl], particles.volume[sl], x["plastic_strain"][sl],
                           x["plastic_strain_rate"][sl], x["temperature"][sl],
                           self._optional(particles, "damage", sl), self._optional(particles, "damage_init", sl),
-                          dt, self.mu, self.flow, self.eos, self.damage, self.failure)
+                          dt, self.mu, self.flow, self.eos, self.damage, self.failure, numba.get_num_threads())
         # The EOS stiffens under compression: the time step follows the current state.
         self.wave_speed = max(self.reference_wave_speed, fastest)
 

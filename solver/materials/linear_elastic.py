@@ -7,15 +7,15 @@ is sigma : C^-1 : sigma / 2, exact for this model without keeping the strain.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver.materials.elastic import IsotropicElastic
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def _update(L, stress, dt, lam, mu):
     n, dim = L.shape[0], L.shape[1]
-    for p in range(n):
+    for p in prange(n):
         tr = 0.0
         for a in range(dim):
             tr += L[p, a, a]

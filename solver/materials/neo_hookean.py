@@ -9,16 +9,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver.kernels import determinant
 from solver.materials.elastic import IsotropicElastic
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def _update(F, stress, lam, mu):
     n, dim = F.shape[0], F.shape[1]
-    for p in range(n):
+    for p in prange(n):
         J = determinant(F[p])
         c = lam * math.log(J) / J
         for a in range(3):

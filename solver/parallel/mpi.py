@@ -110,6 +110,11 @@ class SlabDomain:
         stencil.idx -= self._node_offset
         return outside
 
+    def frame(self, grid: Grid):
+        """The fused kernels' frame: whole-grid coordinates (as `weights`), local node numbers."""
+        return SimpleNamespace(lower=self.lower, h=self.h, inv_h=self._inv_h, cells=self.cells,
+                               strides=grid.strides, offset=self._node_offset)
+
     # -- particles ----------------------------------------------------------------
 
     def distribute(self, particles) -> None:

@@ -6,6 +6,8 @@ nothing, or returns its argument.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from solver import shape
 from solver.boundary import Constraints
 from solver.results import ResultWriter
@@ -28,6 +30,12 @@ class SingleProcess:
 
     def weights(self, module, spec, x, particles, grid, stencil) -> int:
         return shape.evaluate(module, spec, x, particles, grid, stencil)
+
+    def frame(self, grid):
+        """Where the fused kernels (solver/fused.py) place particles: the whole grid's
+        origin, cells and spacing, and the node numbering of this process's grid."""
+        return SimpleNamespace(lower=grid.lower, h=grid.h, inv_h=grid.inv_h, cells=grid.cells,
+                               strides=grid.strides, offset=0)
 
     def distribute(self, particles) -> None:
         pass

@@ -1,0 +1,200 @@
+"""The elastic-block MLS-MPM step of benchmarks/reference_mls.py in NVIDIA Warp, on its CPU device.
+
+    python mls_warp.py BLOCK.npz STEPS     -> one JSON line: particle-steps per second
+
+Run by benchmarks/throughput.py in its own process. Warp runs CPU kernels on one
+thread. Same arithmetic as the numba reference: quadratic B-splines, the stress
+folded into the APIC affine momentum, neo-Hookean Kirchhoff stress, float64.
+"""
+import json
+import sys
+import time
+
+import numpy as np
+import warp as wp
+
+f64 = wp.float64
+
+
+@wp.func
+def bspline(f: wp.vec3d):
+    """Row j: the weights of node j along each axis (the fractional positions f, in cells)."""
+    a = wp.vec3d(f64(1.5), f64(1.5), f64(1.5)) - f
+    b = f - wp.vec3d(f64(1.0), f64(1.0), f64(1.0))
+    c = f - wp.vec3d(f64(0.5), f64(0.5), f64(0.5))
+    return wp.mat33d(f64(0.5) * a[0] * a[0], f64(0.5) * a[1] * a[1], f64(0.5) * a[2] * a[2],
+                     f64(0.75) - b[0] * b[0], f64(0.75) - b[1] * b[1], f64(0.75) - b[2] * b[2],
+                     f64(0.5) * c[0] * c[0], f64(0.5) * c[1] * c[1], f64(0.5) * c[2] * c[2])
+
+
+@wp.kernel
+def p2g_2d(x: wp.array(dtype=wp.vec2d), v: wp.array(dtype=wp.vec2d), C: wp.array(dtype=wp.mat22d),
+           F: wp.array(dtype=wp.mat22d), mass: wp.array(dtype=wp.float64), vol: wp.array(dtype=wp.float64),
+           grid_m: wp.array2d(dtype=wp.float64), grid_v: wp.array2d(dtype=wp.vec2d),
+           dt: wp.float64, inv_dx: wp.float64, lam: wp.float64, mu: wp.float64):
+    p = wp.tid()
+    X = x[p] * inv_dx
+    bx = int(X[0] - f64(0.5))
+    by = int(X[1] - f64(0.5))
+    fx = X[0] - f64(bx)
+    fy = X[1] - f64(by)
+    W = bspline(wp.vec3d(fx, fy, f64(1.0)))
+    Fp = F[p]
+    J = wp.determinant(Fp)
+    eye = wp.identity(n=2, dtype=wp.float64)
+    tau = mu * (Fp * wp.transpose(Fp) - eye) + lam * wp.log(J) * eye
+    affine = (-dt * vol[p] * f64(4.0) * inv_dx * inv_dx) * tau + mass[p] * C[p]
+    dx = f64(1.0) / inv_dx
+    mv = mass[p] * v[p]
+    for i in range(3):
+        for j in range(3):
+            w = W[i, 0] * W[j, 1]
+            dpos = wp.vec2d((f64(i) - fx) * dx, (f64(j) - fy) * dx)
+            wp.atomic_add(grid_v, bx + wp.int32(i), by + wp.int32(j), w * (mv + affine * dpos))
+            wp.atomic_add(grid_m, bx + wp.int32(i), by + wp.int32(j), w * mass[p])
+
+
+@wp.kernel
+def grid_2d(grid_m: wp.array2d(dtype=wp.float64), grid_v: wp.array2d(dtype=wp.vec2d)):
+    i, j = wp.tid()
+    if grid_m[i, j] > f64(0.0):
+        grid_v[i, j] = grid_v[i, j] / grid_m[i, j]
+
+
+@wp.kernel
+def g2p_2d(x: wp.array(dtype=wp.vec2d), v: wp.array(dtype=wp.vec2d), C: wp.array(dtype=wp.mat22d),
+           F: wp.array(dtype=wp.mat22d), grid_v: wp.array2d(dtype=wp.vec2d), dt: wp.float64, inv_dx: wp.float64):
+    p = wp.tid()
+    X = x[p] * inv_dx
+    bx = int(X[0] - f64(0.5))
+    by = int(X[1] - f64(0.5))
+    fx = X[0] - f64(bx)
+    fy = X[1] - f64(by)
+    W = bspline(wp.vec3d(fx, fy, f64(1.0)))
+    new_v = wp.vec2d()
+    new_C = wp.mat22d()
+    for i in range(3):
+        for j in range(3):
+            w = W[i, 0] * W[j, 1]
+            gi = bx + wp.int32(i)
+            gj = by + wp.int32(j)
+            g = grid_v[gi, gj]
+            new_v = new_v + w * g
+            new_C = new_C + (f64(4.0) * inv_dx * w) * wp.outer(g, wp.vec2d(f64(i) - fx, f64(j) - fy))
+    v[p] = new_v
+    C[p] = new_C
+    x[p] = x[p] + dt * new_v
+    F[p] = (wp.identity(n=2, dtype=wp.float64) + dt * new_C) * F[p]
+
+
+@wp.kernel
+def p2g_3d(x: wp.array(dtype=wp.vec3d), v: wp.array(dtype=wp.vec3d), C: wp.array(dtype=wp.mat33d),
+           F: wp.array(dtype=wp.mat33d), mass: wp.array(dtype=wp.float64), vol: wp.array(dtype=wp.float64),
+           grid_m: wp.array3d(dtype=wp.float64), grid_v: wp.array3d(dtype=wp.vec3d),
+           dt: wp.float64, inv_dx: wp.float64, lam: wp.float64, mu: wp.float64):
+    p = wp.tid()
+    X = x[p] * inv_dx
+    bx = int(X[0] - f64(0.5))
+    by = int(X[1] - f64(0.5))
+    bz = int(X[2] - f64(0.5))
+    fx = X[0] - f64(bx)
+    fy = X[1] - f64(by)
+    fz = X[2] - f64(bz)
+    W = bspline(wp.vec3d(fx, fy, fz))
+    Fp = F[p]
+    J = wp.determinant(Fp)
+    eye = wp.identity(n=3, dtype=wp.float64)
+    tau = mu * (Fp * wp.transpose(Fp) - eye) + lam * wp.log(J) * eye
+    affine = (-dt * vol[p] * f64(4.0) * inv_dx * inv_dx) * tau + mass[p] * C[p]
+    dx = f64(1.0) / inv_dx
+    mv = mass[p] * v[p]
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                w = W[i, 0] * W[j, 1] * W[k, 2]
+                dpos = wp.vec3d((f64(i) - fx) * dx, (f64(j) - fy) * dx, (f64(k) - fz) * dx)
+                wp.atomic_add(grid_v, bx + wp.int32(i), by + wp.int32(j), bz + wp.int32(k), w * (mv + affine * dpos))
+                wp.atomic_add(grid_m, bx + wp.int32(i), by + wp.int32(j), bz + wp.int32(k), w * mass[p])
+
+
+@wp.kernel
+def grid_3d(grid_m: wp.array3d(dtype=wp.float64), grid_v: wp.array3d(dtype=wp.vec3d)):
+    i, j, k = wp.tid()
+    if grid_m[i, j, k] > f64(0.0):
+        grid_v[i, j, k] = grid_v[i, j, k] / grid_m[i, j, k]
+
+
+@wp.kernel
+def g2p_3d(x: wp.array(dtype=wp.vec3d), v: wp.array(dtype=wp.vec3d), C: wp.array(dtype=wp.mat33d),
+           F: wp.array(dtype=wp.mat33d), grid_v: wp.array3d(dtype=wp.vec3d), dt: wp.float64, inv_dx: wp.float64):
+    p = wp.tid()
+    X = x[p] * inv_dx
+    bx = int(X[0] - f64(0.5))
+    by = int(X[1] - f64(0.5))
+    bz = int(X[2] - f64(0.5))
+    fx = X[0] - f64(bx)
+    fy = X[1] - f64(by)
+    fz = X[2] - f64(bz)
+    W = bspline(wp.vec3d(fx, fy, fz))
+    new_v = wp.vec3d()
+    new_C = wp.mat33d()
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                w = W[i, 0] * W[j, 1] * W[k, 2]
+                gi = bx + wp.int32(i)
+                gj = by + wp.int32(j)
+                gk = bz + wp.int32(k)
+                g = grid_v[gi, gj, gk]
+                new_v = new_v + w * g
+                new_C = new_C + (f64(4.0) * inv_dx * w) * wp.outer(g, wp.vec3d(f64(i) - fx, f64(j) - fy, f64(k) - fz))
+    v[p] = new_v
+    C[p] = new_C
+    x[p] = x[p] + dt * new_v
+    F[p] = (wp.identity(n=3, dtype=wp.float64) + dt * new_C) * F[p]
+
+
+def main(path: str, steps: int) -> None:
+    wp.config.quiet = True
+    wp.init()
+    data = np.load(path)
+    x0 = data["x"]
+    n, dim = x0.shape
+    cells = int(data["cells"])
+    vec, mat = (wp.vec2d, wp.mat22d) if dim == 2 else (wp.vec3d, wp.mat33d)
+    device = "cpu"
+    x = wp.array(x0, dtype=vec, device=device)
+    v = wp.array(data["v"], dtype=vec, device=device)
+    C = wp.zeros(n, dtype=mat, device=device)
+    F = wp.array(np.tile(np.eye(dim), (n, 1, 1)), dtype=mat, device=device)
+    mass = wp.array(data["mass"], dtype=wp.float64, device=device)
+    vol = wp.array(data["volume"], dtype=wp.float64, device=device)
+    shape = (cells + 1,) * dim
+    grid_m = wp.zeros(shape, dtype=wp.float64, device=device)
+    grid_v = wp.zeros(shape, dtype=vec, device=device)
+    p2g, grid, g2p = (p2g_2d, grid_2d, g2p_2d) if dim == 2 else (p2g_3d, grid_3d, g2p_3d)
+    dt, inv_dx = f64(float(data["dt"])), f64(float(cells))
+    lam, mu = f64(float(data["lam"])), f64(float(data["mu"]))
+
+    def step():
+        grid_m.zero_()
+        grid_v.zero_()
+        wp.launch(p2g, dim=n, inputs=[x, v, C, F, mass, vol, grid_m, grid_v, dt, inv_dx, lam, mu], device=device)
+        wp.launch(grid, dim=shape, inputs=[grid_m, grid_v], device=device)
+        wp.launch(g2p, dim=n, inputs=[x, v, C, F, grid_v, dt, inv_dx], device=device)
+
+    for _ in range(3):           # compile
+        step()
+    wp.synchronize()
+    best = 0.0
+    for _ in range(3):
+        start = time.perf_counter()
+        for _ in range(steps):
+            step()
+        wp.synchronize()
+        best = max(best, n * steps / (time.perf_counter() - start))
+    print(json.dumps({"rate": best, "x_mean": float(x.numpy().mean())}))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]))

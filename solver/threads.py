@@ -1,0 +1,96 @@
+"""Threads inside one process: how many, and how the particle loops share them.
+
+Every threaded kernel splits the particles into one contiguous block per thread
+(`block_bounds`) and runs the blocks with numba's prange. Gathers (G2P, the
+kinematics, the materials) write only their own particle's rows, so they are
+race-free as they stand and give the same bits for any thread count.
+
+Scatters (P2G) would race where two particles of different blocks share a node.
+Each thread adds its block into its own copy of the nodal arrays instead, and
+the copies are summed node by node afterwards (`ScatterCopies`); thread 0 adds
+straight into the grid, so one thread costs nothing extra. The sums then differ
+between thread counts only in the order of the additions: round-off.
+The alternative, particles binned by cell each step and processed in coloured
+blocks of cells, was measured against this (benchmarks/p2g_strategies.py): the
+counting sort and the indirect particle access cost more than summing the
+copies of a grid of this size, on this machine (docs/benchmarks.md).
+
+The count comes from the scene's `parallel.threads`; 0 (the default) means the
+cores this process may use, shared among its processes.
+"""
+from __future__ import annotations
+
+import os
+
+# numba's OpenMP threads spin after each parallel loop by default, waiting for the next one.
+# On a machine whose cores are shared (the serial phases of the step, other processes, MPI
+# ranks polling), the spinning threads take the core the main thread needs: measured, a
+# serial kernel ran 50x slower between parallel ones. Passive waiting costs a wake-up per loop.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import numba  # noqa: E402  (after the policy: OpenMP reads it when numba first starts its threads)
+import numpy as np  # noqa: E402
+from numba import njit  # noqa: E402
+
+
+def available_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not on Linux
+        return os.cpu_count() or 1
+
+
+def configure(scene) -> int:
+    """Set numba's thread count for this process from the scene; returns it.
+
+    numba's pool is sized at start-up (NUMBA_NUM_THREADS, by default the cores it
+    sees): a request beyond it is capped there."""
+    requested = scene.parallel.threads or max(1, available_cores() // scene.parallel.processes)
+    threads = max(1, min(requested, numba.config.NUMBA_NUM_THREADS))
+    numba.set_num_threads(threads)
+    return threads
+
+
+@njit(cache=True)
+def block_bounds(n, blocks):
+    """Start of each of `blocks` near-equal contiguous blocks of range(n), and n."""
+    bounds = np.empty(blocks + 1, dtype=np.int64)
+    for b in range(blocks + 1):
+        bounds[b] = (n * b) // blocks
+    return bounds
+
+
+class ScatterCopies:
+    """Per-thread copies of the nodal arrays a P2G kernel adds into, beyond the first.
+
+    `mass` is (threads - 1, n_nodes), `momentum` and `force` (threads - 1, n_nodes,
+    dim); with one thread they are empty and the kernels add into the grid alone.
+    """
+
+    def __init__(self, n_nodes: int, dim: int, threads: int):
+        extra = threads - 1
+        self.threads = threads
+        self.mass = np.zeros((extra, n_nodes))
+        self.momentum = np.zeros((extra, n_nodes, dim))
+        self.force = np.zeros((extra, n_nodes, dim))
+
+
+@njit(parallel=True, cache=True)
+def add_copies(mass, momentum, force, copies_mass, copies_momentum, copies_force):
+    """Add the copies into the grid's arrays, node by node (the nodes split among threads)."""
+    n, dim = momentum.shape
+    for i in numba.prange(n):
+        for t in range(copies_mass.shape[0]):
+            mass[i] += copies_mass[t, i]
+            for a in range(dim):
+                momentum[i, a] += copies_momentum[t, i, a]
+                force[i, a] += copies_force[t, i, a]
+
+
+@njit(parallel=True, cache=True)
+def add_momentum_copies(momentum, copies_momentum):
+    n, dim = momentum.shape
+    for i in numba.prange(n):
+        for t in range(copies_momentum.shape[0]):
+            for a in range(dim):
+                momentum[i, a] += copies_momentum[t, i, a]
