@@ -15,6 +15,8 @@ What changes against plane strain:
 r_p in the hoop terms is sum_I N_I r_I, the radius where the weights were
 evaluated: for linear (and B-spline) functions it is the particle's radius at
 the start of the step, and a velocity v_r = a r gives L_thth = a exactly.
+r_I is taken from the node's index in the whole grid, so that a process holding
+a slab of it computes the same radii as one process, bit for bit.
 """
 from __future__ import annotations
 
@@ -25,24 +27,24 @@ from numba import njit
 
 
 @njit(cache=True)
-def add_hoop_force(spec, idx, w, lower_r, h_r, nodes_r, volume, stress, grid_force):
+def add_hoop_force(spec, idx, w, lower_r, h_r, nodes_r, first_r, volume, stress, grid_force):
     """f_rI -= V_p sigma_thth,p N_I(x_p) / r_p (the third term of eq. G.2)."""
     n = w.shape[0]
     nk = len(spec[1])
     for p in range(n):
-        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r)
+        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
         s = volume[p] * stress[p, 2, 2] / r
         for k in range(nk):
             grid_force[idx[p, k], 0] -= w[p, k] * s
 
 
 @njit(cache=True)
-def hoop_kinematics(spec, idx, w, lower_r, h_r, nodes_r, v_grid, dt, L, F, volume):
+def hoop_kinematics(spec, idx, w, lower_r, h_r, nodes_r, first_r, v_grid, dt, L, F, volume):
     """L_thth = sum_I N_I v_rI / r_p (eq. G.4); F_thth and the volume follow."""
     n = w.shape[0]
     nk = len(spec[1])
     for p in range(n):
-        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r)
+        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
         vr = 0.0
         for k in range(nk):
             vr += w[p, k] * v_grid[idx[p, k], 0]
@@ -53,18 +55,20 @@ def hoop_kinematics(spec, idx, w, lower_r, h_r, nodes_r, v_grid, dt, L, F, volum
 
 
 @njit(cache=True)
-def _radius(idx, w, p, nk, lower_r, h_r, nodes_r):
-    """sum_I N_I(x_p) r_I; nodes are numbered with r fastest."""
+def _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r):
+    """sum_I N_I(x_p) r_I; nodes are numbered with r fastest, the local grid's first
+    r layer being layer first_r of the whole grid (lower_r is the whole grid's)."""
     r = 0.0
     for k in range(nk):
-        r += w[p, k] * (lower_r + h_r * (idx[p, k] % nodes_r))
+        r += w[p, k] * (lower_r + h_r * (first_r + idx[p, k] % nodes_r))
     return r
 
 
 class Axisymmetry:
     """Turns the plane-strain state of a 2D scene into the axisymmetric one and adds its terms."""
 
-    def __init__(self, particles, grid):
+    def __init__(self, scene, particles):
+        self._lower_r, self._h_r = float(scene.grid_lower()[0]), float(scene.cell_sizes()[0])
         ring = 2.0 * math.pi * particles.x[:, 0]
         for name in ("mass", "volume", "volume0"):
             getattr(particles, name)[:] *= ring
@@ -73,7 +77,10 @@ class Axisymmetry:
         F[:, :2, :2] = particles.F
         F[:, 2, 2] = 1.0
         particles.F, particles.L = F, np.zeros((n, 3, 3))
-        self._r = (float(grid.lower[0]), float(grid.h[0]), int(grid.cells[0]) + 1)
+
+    def place(self, grid, first_r: int) -> None:
+        """The grid of this process, whose first node layer along r is layer first_r of the whole grid."""
+        self._r = (self._lower_r, self._h_r, int(grid.cells[0]) + 1, first_r)
 
     def add_forces(self, spec, stencil, particles, grid_force) -> None:
         add_hoop_force(spec, stencil.idx, stencil.w, *self._r, particles.volume, particles.stress, grid_force)

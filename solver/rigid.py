@@ -18,16 +18,18 @@ import numpy as np
 from numba import njit
 
 from solver.expressions import compile_expression
+from solver.state import grid_geometry
 
 AXES = "xyz"
 
 
 @njit(cache=True)
-def mark_nodes(spec, index, x, body, lower, inv_h, cells, strides, node_body, out):
-    """For each rigid particle (index), the 2**dim nodes of its cell: node_body[node] = its body.
+def mark_nodes(spec, index, x, body, lower, inv_h, cells, strides, node_body, nodes, bodies, first):
+    """For each rigid particle (index), the 2**dim nodes of its cell, each once: the first
+    particle to reach a node gives it its body.
 
-    Returns the number of nodes written to `out` (each once). node_body must be -1
-    everywhere on entry; the caller resets the marked entries afterwards.
+    Writes nodes[i], bodies[i] and first[i] (that particle) and returns how many.
+    node_body must be -1 everywhere on entry; the caller resets the marked entries afterwards.
     """
     dim, corners = len(spec[0]), 1 << len(spec[0])
     count = 0
@@ -44,13 +46,15 @@ def mark_nodes(spec, index, x, body, lower, inv_h, cells, strides, node_body, ou
                 node += ((k >> a) & 1) * strides[a]
             if node_body[node] < 0:
                 node_body[node] = b
-                out[count] = node
+                nodes[count] = node
+                bodies[count] = b
+                first[count] = p
                 count += 1
     return count
 
 
 @njit(cache=True)
-def impose(nodes, node_body, velocity, imposed, grid_mass, v, record, impulse):
+def impose(nodes, bodies, velocity, imposed, grid_mass, v, record, impulse):
     """v_I = the body's velocity on its imposed axes; returns the work sum m_I (v_b - v_I) v_b.
 
     With `record`, impulse[b] accumulates m_I (v_b - v_I): the force times dt that
@@ -59,7 +63,7 @@ def impose(nodes, node_body, velocity, imposed, grid_mass, v, record, impulse):
     work = 0.0
     for i in range(nodes.shape[0]):
         node = nodes[i]
-        b = node_body[node]
+        b = bodies[i]
         for a in range(v.shape[1]):
             if imposed[b, a]:
                 j = grid_mass[node] * (velocity[b, a] - v[node, a])
@@ -88,15 +92,23 @@ def move_particles(index, body, start, dt, velocity, x, v, F, stress):
 
 
 class RigidBodies:
-    """The scene's rigid bodies: prescribed velocities, marked nodes, reactions."""
+    """The scene's rigid bodies: prescribed velocities, marked nodes, reactions.
 
-    def __init__(self, scene, particles, grid):
+    Nodes are marked in the numbers of the whole grid: a rigid particle's cell may
+    have nodes in a neighbouring slab, and in TLMPM (slabs of the reference
+    configuration) its current position may be anywhere. With several processes
+    the marks are gathered, each process imposes the velocities on the nodes it
+    owns (share_nodes gives the ghost copies their values) and counts their
+    impulses, and reactions() sums them over the processes.
+    """
+
+    def __init__(self, scene, particles, domain):
         rigid_materials = {name for name, m in scene.materials.items() if m.model == "rigid"}
         dim = scene.dimension
         n_bodies = len(scene.bodies)
         self.is_rigid = np.array([b.material in rigid_materials for b in scene.bodies])
         self.any = bool(self.is_rigid.any())
-        self.grid = grid
+        self.domain = domain
         self.names = [b.name.replace("/", "_") for b in scene.bodies]
         self.velocity = np.zeros((n_bodies, dim))       # prescribed at the end of the step
         self.imposed = np.zeros((n_bodies, dim), dtype=np.bool_)
@@ -112,8 +124,11 @@ class RigidBodies:
         if not self.any:
             return
         particles.mass[self.is_rigid[particles.body]] = 0.0   # boundary conditions, not bodies
-        self._node_body = np.full(grid.n_nodes, -1, dtype=np.int64)
-        self._nodes = np.zeros(0, dtype=np.int64)
+        self._whole = grid_geometry(scene)   # one process: its grid
+        self._node_body = np.full(self._whole.n_nodes, -1, dtype=np.int64)
+        self._marked = np.zeros(0, dtype=np.int64)     # whole-grid numbers marked in _node_body
+        self._nodes = np.zeros(0, dtype=np.int64)      # nodes to impose on, numbered on this process's grid
+        self._bodies = np.zeros(0, dtype=np.int64)     # and the body of each
         self._body_seen = None   # the particles.body array the index below was built from
         self._set_velocity(0.0)
         index = self._rigid_index(particles)
@@ -133,7 +148,8 @@ class RigidBodies:
         if particles.body is not self._body_seen:
             self._body_seen = particles.body
             self._index = np.flatnonzero(self.is_rigid[particles.body])
-            self._marked = np.empty(self._index.size << particles.dimension, dtype=np.int64)
+            room = self._index.size << particles.dimension
+            self._buffers = tuple(np.empty(room, dtype=np.int64) for _ in range(3))
         return self._index
 
     # -- the step -----------------------------------------------------------------
@@ -142,19 +158,41 @@ class RigidBodies:
         """Mark the nodes of the rigid particles' cells and evaluate the velocities at t_end."""
         if not self.any:
             return
-        g = self.grid
         self._set_velocity(t_end)
-        self._node_body[self._nodes] = -1
+        self._node_body[self._marked] = -1
         index = self._rigid_index(particles)
-        count = mark_nodes(spec, index, particles.x, particles.body, g.lower,
-                           g.inv_h, g.cells, g.strides, self._node_body, self._marked)
-        self._nodes = self._marked[:count]
+        nodes, bodies, first = self._buffers
+        w = self._whole
+        count = mark_nodes(spec, index, particles.x, particles.body, w.lower, w.inv_h, w.cells, w.strides,
+                           self._node_body, nodes, bodies, first)
+        self._marked = nodes[:count]
+        self._nodes, self._bodies = self._owned_marks(self._marked, bodies[:count], particles.id[first[:count]])
         self._start = particles.x[index]
+
+    def _owned_marks(self, nodes, bodies, ids):
+        """The marks on nodes owned here, in local numbers, with those other processes made on
+        them; where several reach a node, the mark of the lowest particle id wins (as in one
+        process, which holds its particles in id order). One process: the marks as they are."""
+        d = self.domain
+        local = d.owned_local(nodes)
+        here = local >= 0
+        arrived = d.allgather(np.stack([nodes[~here], bodies[~here], ids[~here]], axis=1))   # the others' nodes
+        theirs = d.owned_local(arrived[:, 0])
+        arrived, theirs = arrived[theirs >= 0], theirs[theirs >= 0]
+        local, bodies = local[here], bodies[here]
+        if not arrived.size:
+            return local, bodies
+        local, bodies = np.concatenate([local, theirs]), np.concatenate([bodies, arrived[:, 1]])
+        order = np.lexsort((np.concatenate([ids[here], arrived[:, 2]]), local))   # by node, then by id
+        new_node = np.ones(order.size, dtype=bool)
+        new_node[1:] = local[order[1:]] != local[order[:-1]]
+        first = order[new_node]
+        return local[first], bodies[first]
 
     def impose(self, grid_mass, v, record: bool) -> float:
         if not self.any:
             return 0.0
-        return impose(self._nodes, self._node_body, self.velocity, self.imposed, grid_mass, v, record, self.impulse)
+        return impose(self._nodes, self._bodies, self.velocity, self.imposed, grid_mass, v, record, self.impulse)
 
     def end_step(self, particles, dt: float) -> None:
         if not self.any:
@@ -166,10 +204,12 @@ class RigidBodies:
     # -- output -------------------------------------------------------------------
 
     def reactions(self) -> dict[str, float]:
-        """reaction_<body>_<axis>: mean force of the material on each rigid body since the last call."""
+        """reaction_<body>_<axis>: mean force of the material on each rigid body since the last call
+        (summed over the processes: each counts the nodes it owns)."""
         if not self.any:
             return {}
-        force = -self.impulse / self._elapsed if self._elapsed > 0 else np.zeros_like(self.impulse)
+        impulse = self.domain.sum(self.impulse)
+        force = -impulse / self._elapsed if self._elapsed > 0 else np.zeros_like(impulse)
         self.impulse[:] = 0.0
         self._elapsed = 0.0
         return {f"reaction_{self.names[b]}_{AXES[a]}": float(force[b, a])

@@ -701,14 +701,6 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
                 problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
                 grid_ok = False
 
-    if scene.parallel.processes > 1:
-        if scene.method.formulation == "tlmpm":
-            problems.append(("parallel.processes", "formulation 'tlmpm' runs on one process for now: the "
-                             "decomposition splits the current configuration, TLMPM's grid is the reference one"))
-        if scene.axisymmetric:
-            problems.append(("parallel.processes", "axisymmetric scenes run on one process for now"))
-        if any(getattr(m, "model", None) == "rigid" for m in scene.materials.values()):
-            problems.append(("parallel.processes", "scenes with rigid bodies run on one process for now"))
     if scene.axisymmetric and scene.method.formulation == "tlmpm":
         problems.append(("axisymmetric", "axisymmetric scenes need formulation 'ulmpm' for now "
                          "(the hoop terms are in the update-Lagrangian step)"))

@@ -134,6 +134,15 @@ def make_grid(scene) -> Grid:
     )
 
 
+def grid_geometry(scene) -> Grid:
+    """The whole grid's placement and node numbering (lower, h, cells, inv_h, strides), without nodal arrays."""
+    empty = np.zeros((0, scene.dimension))
+    return Grid(lower=np.asarray(scene.grid_lower(), dtype=np.float64),
+                h=np.asarray(scene.cell_sizes(), dtype=np.float64),
+                cells=np.asarray(scene.grid_shape(), dtype=np.int64),
+                mass=np.zeros(0), momentum=empty, force=empty, v_old=empty, v_new=empty)
+
+
 def make_stencil(n: int, dim: int, support: int) -> Stencil:
     nk = support**dim
     return Stencil(idx=np.zeros((n, nk), dtype=np.int64), w=np.zeros((n, nk)), dw=np.zeros((n, nk, dim)))

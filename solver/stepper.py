@@ -64,7 +64,7 @@ class ExplicitMPM:
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
         self.loads = BodyLoads(scene)
-        if self.loads.needs_reference:
+        if self.loads.needs_reference or method.formulation == "tlmpm":   # TLMPM: slabs of X too
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
         self.time = 0.0
@@ -84,10 +84,9 @@ class ExplicitMPM:
         # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
         self.domain = parallel.decompose(scene, self.shape.SUPPORT)
         self.domain.distribute(self.particles)
+        self.axisymmetry = Axisymmetry(scene, self.particles) if scene.axisymmetric else None
+        self.rigid = RigidBodies(scene, self.particles, self.domain)
         self.place()
-        # (one process only, for now: validation keeps rigid bodies and axisymmetry off several)
-        self.axisymmetry = Axisymmetry(self.particles, self.grid) if scene.axisymmetric else None
-        self.rigid = RigidBodies(scene, self.particles, self.grid)
         masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
 
@@ -124,6 +123,8 @@ class ExplicitMPM:
         self.grid = self.domain.grid(self.scene)
         self.frame = self.domain.frame(self.grid)
         self.constraints = self.domain.constraints(self.scene, self.grid)
+        if self.axisymmetry is not None:
+            self.axisymmetry.place(self.grid, self.domain.first_node(0))   # radii from whole-grid node layers
         self.copies = threads.ScatterCopies(self.grid.n_nodes, self.scene.dimension, self.threads)
         # APIC: PIC velocities plus the affine matrix C_p (solver/transfer.py)
         self.affine = AffineTransfer(self.particles, self.grid) if self.scene.method.transfer == "apic" else None

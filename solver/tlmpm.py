@@ -18,76 +18,84 @@ between bodies (review 2.6).
 
 Everything else (grid update, boundary conditions, PIC/FLIP/APIC, time step,
 energies) is the one of `ExplicitMPM`: the kernels only ever see (idx, w, dw).
+With several processes the slabs are cut in the reference configuration
+(solver/parallel/mpi.py): a particle stays on its process for the whole run,
+and the ghost sums and halo shares are those of the updated-Lagrangian step.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from solver import kernels, shape
+from solver import kernels
 from solver.stepper import ExplicitMPM
 
 
 class TotalLagrangianMPM(ExplicitMPM):
     """Particles, grid and the total-Lagrangian step of one scene."""
 
-    def __init__(self, scene):
-        super().__init__(scene)                                         # places the grid: weights at X_p
-        p = self.particles
-        self.piola = np.zeros((p.count, scene.dimension, scene.dimension))
-
     # -- the step (Algorithm 3; USL and USF differ from MUSL as in ULMPM) --------
 
     def _step_musl(self, dt: float) -> None:
-        p, g, s = self.particles, self.grid, self.stencil
+        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
         g.reset()     # m_I comes out the same every step: the weights are fixed (F18)
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         first_piola(p.F, p.stress, self.piola)                          # P = J sigma F^-T
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume0, self.piola, acc,
                     g.mass, g.momentum, g.force)                        # lines 9-12: (mv)_I, f_I with V0, P
         self._affine_p2g()
+        halo.sum_ghosts(g.mass, g.momentum, g.force)                    # (processes: ghost nodes to owners)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
                                 self.mass_cutoff, g.v_old, g.v_new)     # lines 14, 17
         self._impose(g.v_old)                                           # line 15
         self.boundary_work += self._impose(g.v_new, record=True)
+        halo.share_nodes(g.v_old, g.v_new)                              # (owners' values to ghost nodes)
         g.momentum.fill(0.0)
         self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, True, g.momentum)                 # lines 18-19, 28: v_p, (mv)_I, x_p
+        halo.sum_ghosts(g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)
         self._impose(g.v_new)                                           # line 20
+        halo.share_nodes(g.v_new)
         self._update_stress(dt, g.v_new)                                # lines 23-27: F_dot, F, L, sigma
 
     def _step_usl(self, dt: float) -> None:
-        p, g, s = self.particles, self.grid, self.stencil
+        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         first_piola(p.F, p.stress, self.piola)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume0, self.piola, acc,
                     g.mass, g.momentum, g.force)
         self._affine_p2g()
+        halo.sum_ghosts(g.mass, g.momentum, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new, record=True)
+        halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
         self._update_stress(dt, g.v_new)                                # from v~_I^{t+dt}
 
     def _step_usf(self, dt: float) -> None:
-        p, g, s = self.particles, self.grid, self.stencil
+        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
         g.reset()
         kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
         self._affine_p2g()
+        halo.sum_ghosts(g.mass, g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
         self._impose(g.v_old)
+        halo.share_nodes(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         first_piola(p.F, p.stress, self.piola)
         kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume0, self.piola, acc, g.force)
+        halo.sum_ghosts(g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
         self.boundary_work += self._impose(g.v_new, record=True)
+        halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
                     p.x, p.v, p.mass, False, g.momentum)
@@ -98,14 +106,17 @@ class TotalLagrangianMPM(ExplicitMPM):
         """The grid and the reference weights (Alg. 3 lines 3-4): once at the start, and
         again for a new stencil (a restart)."""
         super().place()
-        if self.particles.X is None:
-            self.particles.X = self.particles.x.copy()
         self._reference_weights()
+
+    def _place_particles(self) -> None:
+        super()._place_particles()
+        p = self.particles
+        self.piola = np.zeros((p.count, self.scene.dimension, self.scene.dimension))
 
     def _reference_weights(self) -> None:
         """phi_I(X_p) and grad0 phi_I(X_p): the stencil never changes afterwards."""
         p, g, s = self.particles, self.grid, self.stencil
-        outside = shape.evaluate(self.shape, self.spec, p.X, p, g, s)
+        outside = self.domain.weights(self.shape, self.spec, p.X, p, g, s)   # node numbers of this process's grid
         if outside >= 0:
             self._fail(outside, "reference position", "lies outside the grid")
 

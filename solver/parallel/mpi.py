@@ -14,6 +14,10 @@ In a step:
                  every `rebalance_every` steps the cuts move so that each slab
                  holds about the same number of particles (MPM3DMP 4.3).
 
+Total-Lagrangian scenes (formulation tlmpm) own particles by their reference
+position X: the grid is the reference configuration and X never changes, so
+the slabs are balanced once, at the start, and particles never migrate.
+
 Reductions (energies, the time step, checks), failures and the stop decision
 are collective, so every process takes the same branch at the same step.
 """
@@ -30,7 +34,7 @@ from solver.parallel.binning import bin_particles, owners
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED, UNCHANGED
 from solver.parallel.slabs import balanced_cuts, even_cuts, layers_of, local_nodes, overlap, owned_nodes, split_axis
 from solver.results import ResultWriter
-from solver.state import Grid, material_of_body
+from solver.state import Grid, grid_geometry, material_of_body
 
 HALO_TAG = 17
 
@@ -43,11 +47,13 @@ class SlabDomain:
         self.support = support
         self.dimension = scene.dimension
         self.cells = np.asarray(scene.grid_shape(), dtype=np.int64)
-        self.lower = np.asarray(scene.grid.lower, dtype=np.float64)
+        self.lower = np.asarray(scene.grid_lower(), dtype=np.float64)   # as make_grid places it
         self.h = np.asarray(scene.cell_sizes(), dtype=np.float64)
         self.axis = split_axis(self.cells)
         self._inv_h = 1.0 / self.h   # as Grid computes it
+        self._whole_strides = _strides(self.cells + 1)
         self.rebalance_every = scene.parallel.rebalance_every
+        self._by_reference = scene.method.formulation == "tlmpm"   # slabs of the reference configuration
         self.cuts = even_cuts(int(self.cells[self.axis]), self.processes)
         self._material = material_of_body(scene)
         self._failure: Exception | None = None
@@ -73,6 +79,7 @@ class SlabDomain:
         self._node_shape = tuple(int(c) for c in counts[::-1])   # nodes are numbered x fastest
         self._axis_position = self.dimension - 1 - self.axis
         self._node_offset = shift * int(np.prod(counts[:self.axis]))   # local stride of the split axis
+        self._local_strides = _strides(counts)
 
     def grid(self, scene) -> Grid:
         dim = self.dimension
@@ -85,9 +92,7 @@ class SlabDomain:
                     force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)))
 
     def constraints(self, scene, grid: Grid) -> "_OwnedConstraints":
-        empty = np.zeros((0, self.dimension))
-        whole = Grid(lower=self.lower, h=self.h, cells=self.cells, mass=np.zeros(0), momentum=empty,
-                     force=empty, v_old=empty, v_new=empty)
+        whole = grid_geometry(scene)
         return _OwnedConstraints(Constraints(scene, whole), whole, owned_nodes(self.cuts, self.rank),
                                  self.local[0], self.axis, grid.strides)
 
@@ -124,6 +129,8 @@ class SlabDomain:
     def migrate(self, particles, step: int) -> int:
         """Send the particles that left this slab to their owners; rebalance the slabs when due."""
         moved = UNCHANGED
+        if self._by_reference:   # X never changes: nor do the owners
+            return moved
         if self.rebalance_every > 0 and step % self.rebalance_every == 0:
             cuts = balanced_cuts(self._layer_counts(particles, local=True), self.processes)
             if not np.array_equal(cuts, self.cuts):
@@ -151,14 +158,20 @@ class SlabDomain:
         particles.replace({name: a[order] for name, a in merged.items()})
         return max(moved, PARTICLES_MOVED)
 
+    def _positions(self, particles) -> np.ndarray:
+        """The positions that decide a particle's slab: X in TLMPM, x otherwise."""
+        return particles.X if self._by_reference else particles.x
+
     def _owners(self, particles, dest: np.ndarray) -> int:
         a = self.axis
-        return owners(particles.x[:, a], float(self.lower[a]), float(1.0 / self.h[a]), self.cuts, self.rank, dest)
+        x = self._positions(particles)
+        return owners(x[:, a], float(self.lower[a]), float(1.0 / self.h[a]), self.cuts, self.rank, dest)
 
     def _layer_counts(self, particles, local: bool) -> np.ndarray:
         """Particles per cell layer along the split axis (summed over processes when `local`)."""
         a = self.axis
-        finite = particles.x[np.isfinite(particles.x[:, a]), a]
+        x = self._positions(particles)
+        finite = x[np.isfinite(x[:, a]), a]
         counts = np.bincount(layers_of(finite, self.lower[a], self.h[a], int(self.cells[a])),
                              minlength=int(self.cells[a])).astype(np.int64)
         if local:
@@ -170,6 +183,19 @@ class SlabDomain:
     def _layers(self, array: np.ndarray, lo: int, hi: int) -> np.ndarray:
         shaped = array.reshape(self._node_shape + array.shape[1:])
         return shaped[(slice(None),) * self._axis_position + (slice(lo, hi),)]
+
+    def first_node(self, axis: int) -> int:
+        """Whole-grid index, along `axis`, of the local grid's first node layer."""
+        return int(self.local[0]) if axis == self.axis else 0
+
+    def owned_local(self, nodes: np.ndarray) -> np.ndarray:
+        """Whole-grid node numbers -> local node numbers of those this process owns, -1 for the others."""
+        counts = self.cells + 1
+        coords = (nodes[:, None] // self._whole_strides[None, :]) % counts[None, :]
+        lo, hi = owned_nodes(self.cuts, self.rank)
+        mine = (coords[:, self.axis] >= lo) & (coords[:, self.axis] < hi)
+        coords[:, self.axis] -= self.local[0]
+        return np.where(mine, coords @ self._local_strides, -1)
 
     def sum_ghosts(self, *node_arrays: np.ndarray) -> None:
         """Add what this process put on ghost nodes into their owners' values."""
@@ -228,6 +254,10 @@ class SlabDomain:
     def barrier(self) -> None:
         self.comm.Barrier()
 
+    def allgather(self, array: np.ndarray) -> np.ndarray:
+        """The arrays of every process, concatenated in rank order, on every process."""
+        return np.concatenate(self.comm.allgather(array))
+
     def root_says(self, flag: bool) -> bool:
         """Rank 0's answer on every process (for decisions taken on its clock)."""
         return bool(self.comm.bcast(bool(flag), root=0))
@@ -245,6 +275,11 @@ class SlabDomain:
 
     def writer(self, out_dir, scene, version: str):
         return ResultWriter(out_dir, scene, version) if self.is_root else _NoWriter()
+
+
+def _strides(counts: np.ndarray) -> np.ndarray:
+    """Node number strides of a grid with `counts` nodes per axis (x fastest, as Grid numbers them)."""
+    return np.concatenate(([1], np.cumprod(counts)[:-1])).astype(np.int64)
 
 
 def _column(part: dict, name: str, like: np.ndarray) -> np.ndarray:

@@ -40,6 +40,12 @@ class SingleProcess:
     def distribute(self, particles) -> None:
         pass
 
+    def first_node(self, axis: int) -> int:
+        return 0
+
+    def owned_local(self, nodes):
+        return nodes
+
     def sum_ghosts(self, *node_arrays) -> None:
         pass
 
@@ -69,6 +75,9 @@ class SingleProcess:
 
     def any(self, flag: bool) -> bool:
         return bool(flag)
+
+    def allgather(self, array):
+        return array
 
     def root_says(self, flag: bool) -> bool:
         return flag

@@ -53,6 +53,65 @@ SCENE_3D = {
     "gravity": [0.0, 0.0, -1.0],
 }
 
+# A block on a slip floor squeezed by rigid bodies across the slabs (split along x): two
+# platens on top moving down at different speeds, meeting at x = 0.52 (a slab boundary
+# for K = 2), and a pusher on the right accelerating to the left. Where two bodies'
+# cells share nodes the body seeded first keeps them (the left platen at x = 0.52, the
+# right one over the pusher). The reactions are compared as well.
+RIGID_2D = {
+    **copy.deepcopy(SCENE_2D), "name": "equivalence-rigid",
+    "grid": {"lower": [0.0, 0.0], "upper": [1.0, 0.4], "cell_size": 0.02},
+    "materials": {"rubber": ELASTIC, "steel": {"model": "rigid", "density": 7800}},
+    "bodies": [
+        {"name": "block", "material": "rubber", "particles_per_cell": 2,
+         "geometry": {"type": "box", "lower": [0.2, 0.0], "upper": [0.8, 0.2]}},
+        {"name": "platen_left", "material": "steel", "particles_per_cell": 2, "velocity": [0.0, -0.1],
+         "geometry": {"type": "box", "lower": [0.1, 0.2], "upper": [0.52, 0.24]}},
+        {"name": "platen_right", "material": "steel", "particles_per_cell": 2, "velocity": [0.0, -0.12],
+         "geometry": {"type": "box", "lower": [0.52, 0.2], "upper": [0.9, 0.24]}},
+        {"name": "pusher", "material": "steel", "particles_per_cell": 2, "velocity": ["-0.5*t", None],
+         "geometry": {"type": "box", "lower": [0.8, 0.0], "upper": [0.84, 0.2]}},
+    ],
+    "boundary_conditions": [{"type": "wall", "face": "y-", "mode": "slip"}],
+}
+
+# Billet upsetting (tests/verification/billet.py, scaled down): an axisymmetric J2 steel
+# cylinder compressed by a rigid platen at 50 m/s. The grid has more cells along r than z,
+# so the slabs split the radius: the hoop terms take r_I from whole-grid node layers.
+AXISYMMETRIC = {
+    "name": "equivalence-axisymmetric", "dimension": 2, "axisymmetric": True,
+    "method": {"scheme": "musl", "transfer": "flip", "flip_ratio": 0.99},
+    "grid": {"lower": [0.0, 0.0], "upper": [0.02, 0.018], "cell_size": 0.001},
+    "materials": {"steel": {"model": "j2_plasticity", "density": 7800.0, "youngs_modulus": 200e9,
+                            "poisson_ratio": 0.3, "yield_stress": 0.7e9, "hardening_modulus": 0.3e9},
+                  "platen": {"model": "rigid", "density": 7800.0}},
+    "bodies": [
+        {"name": "billet", "material": "steel", "particles_per_cell": 2,
+         "geometry": {"type": "box", "lower": [0.0, 0.0], "upper": [0.01, 0.015]}},
+        {"name": "platen", "material": "platen", "particles_per_cell": 1, "velocity": [0.0, -50.0],
+         "geometry": {"type": "box", "lower": [0.0, 0.015], "upper": [0.019, 0.017]}},
+    ],
+    "boundary_conditions": [{"type": "wall", "face": "y-", "mode": "slip"}],
+    "time": {"end": 200 * 5e-8, "dt": 5e-8},
+    "output": {"frames": 2, "fields": ["position", "velocity", "stress"], "energies": 10},
+    "parallel": {"processes": 1, "rebalance_every": 20},
+}
+
+# Total Lagrangian (slabs of the reference configuration, particles never migrate):
+# a block contracting along x under gravity, quadratic B-splines with APIC, and a
+# rigid pusher that moves two cells to the left through the reference grid.
+TLMPM_2D = {
+    **copy.deepcopy(RIGID_2D), "name": "equivalence-tlmpm",
+    "method": {"formulation": "tlmpm", "scheme": "musl", "shape_function": "quadratic_bspline",
+               "transfer": "apic"},
+    "bodies": [
+        {"name": "block", "material": "rubber", "particles_per_cell": 2, "initial_velocity": ["0.5*(0.5 - x)", 0.0],
+         "geometry": {"type": "box", "lower": [0.2, 0.02], "upper": [0.8, 0.2]}},
+        {"name": "pusher", "material": "steel", "particles_per_cell": 2, "velocity": ["-2*t", None],
+         "geometry": {"type": "box", "lower": [0.84, 0.02], "upper": [0.88, 0.2]}},
+    ],
+}
+
 
 def scene(base: dict, **changes) -> dict:
     out = copy.deepcopy(base)

@@ -138,11 +138,6 @@ INVALID = [
     ("energies 0", changed(two_disks, "output.energies", 0), "output.energies", ">= 1"),
     ("axisymmetric in 3D", changed(block_3d, "axisymmetric", True), "axisymmetric", "only possible with dimension 2"),
     ("axisymmetric with r < 0", changed(two_disks, "axisymmetric", True), "grid.lower[0]", "must be >= 0"),
-    ("tlmpm on two processes", changed(lambda: changed(two_disks, "method.formulation", "tlmpm"), "parallel", {"processes": 2}),
-     "parallel.processes", "'tlmpm' runs on one process"),
-    ("rigid bodies on two processes", changed(lambda: changed(two_disks, "materials.rubber", {"model": "rigid", "density": 1}),
-                                              "parallel", {"processes": 2}),
-     "parallel.processes", "rigid bodies run on one process"),
     ("rigid body with an initial velocity", changed(lambda: changed(two_disks, "materials.rubber", {"model": "rigid", "density": 1}),
                                                     "bodies.0.initial_velocity", [0, 1]),
      "bodies[0].initial_velocity", "use velocity instead"),
@@ -205,6 +200,19 @@ def test_valid_two_disk_scene_passes():
     assert scene.dimension == 2 and len(scene.bodies) == 2
     assert scene.bodies[1].initial_velocity == ["-0.1", -0.1]
     assert scene.materials["rubber"].youngs_modulus == 1000.0
+
+
+@pytest.mark.parametrize("feature", ["tlmpm", "axisymmetric", "rigid bodies"])
+def test_every_formulation_axisymmetry_and_rigid_bodies_run_on_several_processes(feature):
+    scene = changed(two_disks, "parallel", {"processes": 2})
+    if feature == "tlmpm":
+        scene["method"]["formulation"] = "tlmpm"
+    elif feature == "axisymmetric":
+        scene["axisymmetric"], scene["grid"]["lower"][0] = True, 0.0   # x is the radius
+    else:
+        scene["materials"]["platen"] = {"model": "rigid", "density": 1}
+        scene["bodies"][1] |= {"material": "platen", "velocity": scene["bodies"][1].pop("initial_velocity")}
+    assert load_scene(scene).parallel.processes == 2
 
 
 def test_defaults():
