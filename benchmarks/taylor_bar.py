@@ -5,14 +5,15 @@
 Runs the axisymmetric Taylor bar of tests/verification/taylor_bar.py at cells of
 0.4 and 0.2 mm (2 x 2 particles per cell) with linear hat functions and with
 cubic B-splines, and with --3d the 3D quarter bar at 0.8 and 0.3 mm (2 x 2 x 2, ULMPM)
-and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: cell 0.25 mm, one
-particle per cell), and prints the "Taylor bar" table of docs/benchmarks.md:
+and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: linear, one particle
+per cell) at cells of 0.508 and 0.254 mm, and prints the "Taylor bar" table of docs/benchmarks.md:
 length, impact-face diameter and bulge, the error measure of [R] eq. 6.19, steps,
 particles and wall time, under the experiment and [R] Table 6.
 """
 from __future__ import annotations
 
 import json
+import math
 import sys
 import tempfile
 import time
@@ -23,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
 
 from mpm_cases import Case  # noqa: E402
-from taylor_bar import EXPERIMENT, REVIEW, error_measure, measure, taylor_scene  # noqa: E402
+from taylor_bar import EXPERIMENT, L0, R0, REVIEW, error_measure, measure, taylor_scene  # noqa: E402
 
 from solver import run  # noqa: E402
 
@@ -35,16 +36,22 @@ def ulmpm(dim: int, cell: float, ppc: int, shape: str) -> tuple[str, dict, float
     return f"ULMPM {label}, {shape}, cell {cell * 1e3:g} mm, {ppc}^{dim} ppc", scene, cell / ppc
 
 
-def tlmpm_3d() -> tuple[str, dict, float]:
+def tlmpm_3d(cell: float) -> tuple[str, dict, float]:
+    """examples/taylor_bar_3d_tlmpm.json at another cell size, the reference grid still just
+    covering the bar (L0 / cell whole cells long: cell 0.254 mm seeds the 25.4 mm exactly,
+    the example's 0.25 mm seeds 102 layers, 25.5 mm)."""
     scene = json.loads((ROOT / "examples" / "taylor_bar_3d_tlmpm.json").read_text())
     scene["output"]["frames"] = 2
-    return "TLMPM 3D quarter, linear, cell 0.25 mm, 1 ppc", scene, scene["grid"]["cell_size"]
+    across = math.ceil(R0 / cell - 1e-9) * cell
+    scene["grid"] = {"lower": [0.0, 0.0, 0.0], "upper": [across, round(L0 / cell) * cell, across], "cell_size": cell}
+    return f"TLMPM 3D quarter, linear, cell {cell * 1e3:g} mm, 1 ppc", scene, cell
 
 
 def main() -> int:
     runs = [ulmpm(2, cell, 2, shape) for shape in ("linear", "cubic_bspline") for cell in (0.4e-3, 0.2e-3)]
     if "--3d" in sys.argv:
-        runs += [ulmpm(3, 0.8e-3, 2, "linear"), ulmpm(3, 0.3e-3, 2, "linear"), tlmpm_3d()]
+        runs += [ulmpm(3, 0.8e-3, 2, "linear"), ulmpm(3, 0.3e-3, 2, "linear"),
+                 tlmpm_3d(0.508e-3), tlmpm_3d(0.254e-3)]
     print("| | length L (mm) | diameter D (mm) | bulge W (mm) | error eq. 6.19 | steps | particles | wall time (s) |")
     print("|---|---|---|---|---|---|---|---|")
     e = EXPERIMENT
