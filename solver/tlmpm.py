@@ -16,8 +16,10 @@ cell-crossing noise and no particle ever leaves the grid; x_p is still advanced
 for output and for body forces written in x, y, z. There is no inherent contact
 between bodies (review 2.6).
 
-Everything else (grid update, boundary conditions, PIC/FLIP/APIC, time step,
-energies) is the one of `ExplicitMPM`: the kernels only ever see (idx, w, dw).
+Everything else (grid update, boundary conditions, PIC/FLIP/APIC, energies) is
+the one of `ExplicitMPM`: the kernels only ever see (idx, w, dw). The adaptive
+time step is ExplicitMPM's times the smallest principal stretch of any particle
+(the reference cells deform with the body).
 """
 from __future__ import annotations
 
