@@ -5,7 +5,7 @@
 Each case runs with time.dt = null (adaptive, cfl 0.5) and reports the outcome
 (complete, or the solver's diagnostic), the energy history (kinetic + stored
 energy against the energy put in, i.e. the initial energy plus the work of the
-platen) and the wall time: the "Stability" table of docs/benchmarks.md and the
+platen and of a body force) and the wall time: the "Stability" table of docs/benchmarks.md and the
 plot docs/images/stability_energy.png (--only WORD: the cases whose name has
 WORD, no plot). The last case forces a fixed dt five times
 the CFL limit and must end with the instability diagnostic, not with garbage.
@@ -14,7 +14,9 @@ Sizes fit a shared 2-core machine: the 3D Taylor bar is a quarter at 0.8 mm
 (4,500 particles; --full: 0.3 mm, 84,500 particles, what the issue's ~100k asks);
 the hypervelocity impact is E22 scaled down
 (examples/hypervelocity_lead.json) and, without --full, followed for its first
-10 us (the debris front 66 mm below the plate) on a grid cut to 75 mm.
+10 us (the debris front 66 mm below the plate, the back-splash 25 mm above it) on a grid
+cut to 75 mm below and 30 mm above.
+The vortex is the accuracy issue's E7 (examples/vortex_2d.json, G = 1, TLMPM).
 """
 from __future__ import annotations
 
@@ -52,11 +54,13 @@ def cases(full: bool) -> list[tuple[str, dict]]:
     if not full:
         hypervelocity["time"]["end"] = 10e-6
         hypervelocity["grid"]["lower"][1] = -0.075
+        hypervelocity["grid"]["upper"][1] = 0.03    # the back-splash (3.3 km/s) reaches 25 mm by 10 us
     return [
         ("Taylor bar 190 m/s, 3D quarter", taylor_scene(0.3e-3 if full else 0.8e-3, 2, 3, frames=2)),
         ("disk impact 1160 m/s (E3)", example("disk_impact_1160")),
         ("hypervelocity 6.58 km/s (E22 scaled)", hypervelocity),
         ("billet to 50 % height, axisymmetric", billet_scene(2, 1e-3, 10.0, 0.5, frames=2)),
+        ("vortex G = 1 (E7), TLMPM", example("vortex_2d")),
         ("Taylor bar, dt = 5 x CFL (must stop)", unstable),
     ]
 

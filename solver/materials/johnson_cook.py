@@ -28,8 +28,12 @@ Per particle and step (stress sigma = s - p I, p positive in compression):
 Per-particle state: plastic_strain, plastic_strain_rate, temperature (the body's
 initial_temperature, else room_temperature), and damage (+ damage_init) only when
 the material has a damage model or a failure criterion.
-The stored energy is the elastic part: s:s / (4 G') per unit volume plus the
-work of the EOS's cold pressure (eos.stored_energy).
+The stored energy is a function of the current state, the energy of the stress
+the particle carries: s:s / (4 G') per unit volume plus the work of the EOS's
+cold pressure to the current mu (eos.stored_energy), in tension times (1 - D) as
+the pressure is. A failed particle thus stores nothing once its debris expands
+(the EOS energy of its growing volume, K (J - 1 - ln J), would otherwise grow
+without bound and trip the runner's energy-growth check).
 """
 from __future__ import annotations
 
@@ -166,14 +170,18 @@ def _energy(stress, mass, volume, dmg, G, rho0, eos_prm, out):
     damaged = dmg.shape[0] > 0
     for p in range(stress.shape[0]):
         objective.split(stress[p], s)
-        g = (1.0 - dmg[p]) * G if damaged else G
+        d = dmg[p] if damaged else 0.0
+        g = (1.0 - d) * G
         ss = 0.0
         for a in range(3):
             for b in range(3):
                 ss += s[a, b] * s[a, b]
         mu = mass[p] / (volume[p] * rho0) - 1.0
         shear = volume[p] * ss / (4.0 * g) if g > 0.0 else 0.0
-        out[p] = shear + mass[p] / rho0 * eos.stored_energy(eos_prm, mu)
+        volumetric = mass[p] / rho0 * eos.stored_energy(eos_prm, mu)
+        if mu < 0.0:   # tension carries (1 - D) of the EOS pressure: a failed particle stores nothing
+            volumetric *= 1.0 - d
+        out[p] = shear + volumetric
 
 
 class JohnsonCook(IsotropicElastic):

@@ -37,6 +37,36 @@ def test_adaptive_time_step_follows_the_cfl_formula(tmp_path):
     assert result.time == pytest.approx(0.05, abs=1e-12)
 
 
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_smallest_stretch_is_the_smallest_singular_value_of_F(dim):
+    """The closed forms (2D quadratic, 3D trigonometric cubic) against numpy's SVD, for F near
+    the identity, strongly stretched and sheared, and a rotation times a squash."""
+    from solver.tlmpm import smallest_stretch
+    rng = np.random.default_rng(dim)
+    for scale in (1e-6, 0.1, 1.0):
+        F = np.eye(dim)[None] + scale * rng.normal(size=(200, dim, dim))
+        F = F[np.linalg.det(F) > 1e-2]
+        expected = np.linalg.svd(F, compute_uv=False)[:, -1]
+        got = [smallest_stretch(F[p:p + 1]) for p in range(len(F))]
+        np.testing.assert_allclose(got, expected, rtol=1e-8)   # the cubic's acos loses a few digits
+        assert smallest_stretch(F) == pytest.approx(expected.min(), rel=1e-8)
+
+
+def test_tlmpm_time_step_shrinks_with_the_smallest_stretch(tmp_path):
+    """TLMPM's cells deform with the body: a particle squashed to 0.2 of its reference size
+    along x takes the updated-Lagrangian step times 0.2 (a stretch above 1 leaves it)."""
+    from solver.scene import load_scene
+    from solver.tlmpm import TotalLagrangianMPM
+    sim = TotalLagrangianMPM(load_scene(block(method={"formulation": "tlmpm"},
+                                              time={"end": 0.05, "dt": None})))
+    unstrained = sim.stable_time_step(0.5)
+    assert unstrained == pytest.approx(0.5 * 0.1 / C_DIL, rel=1e-12)
+    sim.particles.F[3] = [[0.2, 0.0], [0.0, 5.0]]
+    assert sim.stable_time_step(0.5) == pytest.approx(0.2 * unstrained, rel=1e-12)
+    sim.particles.F[3] = [[1.5, 0.0], [0.0, 2.0]]
+    assert sim.stable_time_step(0.5) == pytest.approx(unstrained, rel=1e-12)
+
+
 def test_frames_are_evenly_spaced_including_first_and_last(tmp_path):
     result = run(block(time={"end": 0.1, "dt": 0.003}, output={"frames": 5, "fields": ["position"]}), tmp_path)
     times = [f["time"] for f in list_frames(result.result_path)]

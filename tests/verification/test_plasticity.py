@@ -285,6 +285,55 @@ def test_stored_energy_is_the_work_of_the_pressure(eos, direction):
     assert stored == pytest.approx(work, rel=1e-4)
 
 
+@pytest.mark.parametrize("eos", [MG, {"model": "linear"}], ids=["mie_gruneisen", "linear"])
+@pytest.mark.parametrize("direction", [-1.0, 1.0], ids=["compression", "tension"])
+def test_stored_energy_of_uniaxial_elastic_strain_is_the_work_done(eos, direction):
+    """Uniaxial strain L = +-r e_x e_x of an elastic Johnson-Cook point (A = 1 GPa: yield at
+    2 G eps = A, eps = 1.14 %) to 1 % in n = 200 steps: the stored energy, a function of the
+    current state (V s:s / (4 G) + the EOS's cold energy of the current mu), against the work
+    done on the point, int V sigma : D dt = int -p dV + int V s : dev(D) dt (trapezoidal rule
+    on both pairs; dV = V tr(D) dt is exact in the kinematics).
+
+    The hypoelastic deviator keeps its energy w_s = s:s / (4 G) per current volume, so
+    d(V w_s) = V s : dev(D) dt + w_s dV: the stored energy is the work plus int w_s dV, a
+    derived term of about eps = 1 % of the shear energy, added here (trapezoidal too; the
+    deviator is linear in the steps, so the shear part is exact up to (eps / n)^2 terms).
+    What is left is the trapezoidal error of int p dV, (eps / n)^2 / 12 |change of dp/dV| ~ 1e-7
+    relative (dp/dV changes by a few % of K over the path); 1e-6.
+    """
+    point = MaterialPoint({**CU, "A": 1e9, "B": 0.0, "eos": eos}, 3)
+    G_cu = CU["youngs_modulus"] / (2 * (1 + CU["poisson_ratio"]))
+    L = np.zeros((3, 3))
+    L[0, 0] = direction * 1e3
+    dev_L = L - np.trace(L) / 3 * np.eye(3)
+    steps, dt = 200, 1e-2 / 1e3 / 200
+
+    def state():
+        pressure = -np.trace(point.stress) / 3
+        s = point.stress + pressure * np.eye(3)
+        return pressure, s, np.sum(s * s) / (4 * G_cu), point.p.volume[0]
+
+    work = correction = 0.0
+    p0, s0, w0, v0 = state()
+    for _ in range(steps):
+        point.step(L, dt)
+        p1, s1, w1, v1 = state()
+        work += -0.5 * (p0 + p1) * (v1 - v0) + 0.5 * (v0 * np.sum(s0 * dev_L) + v1 * np.sum(s1 * dev_L)) * dt
+        correction += 0.5 * (w0 + w1) * (v1 - v0)
+        p0, s0, w0, v0 = p1, s1, w1, v1
+    assert point.state("plastic_strain") == 0.0
+    assert abs(v1 - 1) > 0.0099
+    stored = float(point.model.particle_strain_energy(point.p, slice(0, 1))[0])
+    assert abs(correction) < 0.011 * stored
+    assert stored == pytest.approx(work + correction, rel=1e-6)
+
+
+def cold_tension_energy(mu):
+    """Work of the Mie-Gruneisen tension branch p = rho0 c0^2 mu per reference volume,
+    int_0^mu p / (1 + m)^2 dm."""
+    return CU["density"] * MG["c0"] ** 2 * (math.log1p(mu) + 1 / (1 + mu) - 1)
+
+
 def test_wave_speed_follows_the_compressed_state():
     """The time step's wave speed is sqrt((rho dp/drho + 4/3 G) / rho) of the current state:
     dp/dmu by a central difference of the formula (relative error ~ (1e-6)^2, far below 1e-6)."""
@@ -320,6 +369,9 @@ def test_damage_scales_tension_only():
     point.step(1e3 * np.eye(3), 1e-6)              # tension
     mu = 1.0 / np.linalg.det(point.p.F[0]) - 1.0
     assert -np.trace(point.stress) / 3 == pytest.approx(0.75 * mie_gruneisen(mu, 0.0), rel=1e-12)
+    # the stored energy is that of the stress carried: 3/4 of the cold tension energy (V0 = 1)
+    stored = float(point.model.particle_strain_energy(point.p, slice(0, 1))[0])
+    assert stored == pytest.approx(0.75 * cold_tension_energy(mu), rel=1e-12)
     for _ in range(3):
         point.step(-1e3 * np.eye(3), 1e-6)          # back into compression: undamaged
     mu = 1.0 / np.linalg.det(point.p.F[0]) - 1.0
@@ -339,6 +391,13 @@ def test_failure_by_minimum_pressure_drops_shear_and_tension():
     assert mie_gruneisen(mu, 0.0) < -1e9                    # it failed where the EOS crossed min_pressure
     assert mie_gruneisen(mu + 3.1e-3, 0.0) > -1e9           # ... and not a step earlier
     assert np.all(point.stress == 0.0)
+    failed = point.snapshot()
+    for _ in range(100):
+        point.step(1e3 * np.eye(3), 1e-6)                     # the debris expands: no stress, nothing stored
+        assert np.all(point.stress == 0.0)
+        assert point.model.particle_strain_energy(point.p, slice(0, 1))[0] == 0.0
+    assert np.linalg.det(point.p.F[0]) > 1.3
+    point.restore(failed)
     shear = np.zeros((3, 3))
     shear[0, 1] = shear[1, 0] = 1e3
     for _ in range(60):
