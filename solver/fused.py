@@ -16,9 +16,14 @@ step gives the general step's answer to round-off (tests/unit/test_fused.py):
 Each kernel runs one contiguous block of particles per thread; P2G scatters
 into per-thread copies of the nodal arrays, summed afterwards (solver/threads.py).
 
-`support` is the tuple (0,) * S with S = 2 (linear) or 3 (quadratic B-spline),
-`variant` encodes what a kernel does (variant_spec): numba compiles one
-specialisation per tuple type, so these are compile-time constants.
+What a kernel does (the support S = 2 for linear, 3 for quadratic B-splines; the
+G2P mode; APIC or not; a FLIP blend or not; a body force or not) reaches it as
+the number of dimensions of small empty arrays (`constant`): numba compiles one
+specialisation per array type, so inside the threads' loops these are
+compile-time constants and the branches of the other variants fold away. Plain
+arguments would be runtime values there (numba passes what a prange loop uses to
+the threads' function as arguments; measured, runtime flags made P2G 20 %
+slower), and tuples, whose length would say the same, cannot be passed in.
 """
 from __future__ import annotations
 
@@ -41,15 +46,17 @@ def applies(scene) -> bool:
             and not any(m.model == "rigid" for m in scene.materials.values()))
 
 
-def support_spec(shape_function: str) -> tuple:
-    return (0,) * FUSED_SHAPES[shape_function]
+_CONSTANTS = [np.empty((0,) * n) for n in range(1, 5)]
 
 
-def variant_spec(mode: int, affine: bool, flip: bool, loaded: bool) -> tuple:
-    """What a kernel does, as tuple lengths, so that numba compiles each variant with
-    the branches of the others folded away: the G2P mode, APIC or not, FLIP (a blend
-    that needs v_old) or not, a body force or not."""
-    return ((0,) * mode, (0,) * int(affine), (0,) * int(flip), (0,) * int(loaded))
+def constant(value: int) -> np.ndarray:
+    """An empty array of value + 1 dimensions: `value` as a compile-time constant
+    (read back as `array.ndim - 1`, see the module docstring)."""
+    return _CONSTANTS[int(value)]
+
+
+def support_of(shape_function: str) -> np.ndarray:
+    return constant(FUSED_SHAPES[shape_function])
 
 
 # -- weights along one axis ------------------------------------------------------
@@ -100,24 +107,24 @@ def first(bad):
 # -- P2G ---------------------------------------------------------------------------
 
 @njit(parallel=True, cache=True)
-def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h, cells, strides, offset,
+def p2g_2d(support, affine_, loaded_, x, v, C, mass, volume, stress, acc, lower, h, inv_h, cells, strides, offset,
            grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad):
     """m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =
     sum_p m_p w b_p - V_p sigma_p grad w. bad[t]: first particle of block t outside the grid."""
-    S = len(support)
-    affine, loaded = len(variant[1]) == 1, len(variant[3]) == 1
     threads = copies_mass.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
     shared_acc = acc.shape[0] == 1
     for t in prange(threads):
+        S, affine, loaded = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2   # compile-time constants
         gm, gp, gf = _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
             okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
             oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            if not (okx and oky):
-                bad[t] = p
-                break
+            if not (okx and oky):      # (no break: an early exit slows the whole loop)
+                if bad[t] < 0:
+                    bad[t] = p
+                continue
             m = mass[p]
             ap = 0 if shared_acc else p
             max_, may = m * acc[ap, 0], m * acc[ap, 1]
@@ -131,7 +138,7 @@ def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
                 dy = (j - fy) * h[1]
                 row = (iy + j) * strides[1] - offset
                 for i in range(S):
-                    node = row + (ix + i) * strides[0]
+                    node = row + ix + i   # (strides[0] is 1: x fastest)
                     w = wx[i] * wy[j]
                     dwx = gx[i] * wy[j]
                     dwy = wx[i] * gy[j]
@@ -153,15 +160,14 @@ def p2g_2d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
 
 
 @njit(parallel=True, cache=True)
-def p2g_3d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h, cells, strides, offset,
+def p2g_3d(support, affine_, loaded_, x, v, C, mass, volume, stress, acc, lower, h, inv_h, cells, strides, offset,
            grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad):
     """p2g_2d in 3D."""
-    S = len(support)
-    affine, loaded = len(variant[1]) == 1, len(variant[3]) == 1
     threads = copies_mass.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
     shared_acc = acc.shape[0] == 1
     for t in prange(threads):
+        S, affine, loaded = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2   # compile-time constants
         gm, gp, gf = _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
@@ -169,8 +175,9 @@ def p2g_3d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
             oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
             okz, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
             if not (okx and oky and okz):
-                bad[t] = p
-                break
+                if bad[t] < 0:
+                    bad[t] = p
+                continue
             m = mass[p]
             ap = 0 if shared_acc else p
             max_, may, maz = m * acc[ap, 0], m * acc[ap, 1], m * acc[ap, 2]
@@ -191,7 +198,7 @@ def p2g_3d(support, variant, x, v, C, mass, volume, stress, acc, lower, h, inv_h
                     row = (iy + j) * strides[1] + (iz + k) * strides[2] - offset
                     wyz, gyz, wygz = wy[j] * wz[k], gy[j] * wz[k], wy[j] * gz[k]
                     for i in range(S):
-                        node = row + (ix + i) * strides[0]
+                        node = row + ix + i   # (strides[0] is 1: x fastest)
                         w = wx[i] * wyz
                         dwx = gx[i] * wyz
                         dwy = wx[i] * gyz
@@ -223,19 +230,20 @@ USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docs
 
 
 @njit(parallel=True, cache=True)
-def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, strides, offset,
+def g2p_2d(support, mode_, affine_, blend_, x, v, C, flip, dt, mass, lower, h, inv_h, cells, strides, offset,
            v_old, v_new, L, F, volume, volume0, rate, grid_mom, copies_mom, bad):
     """USL: v_p (PIC/FLIP blend), C_p = B_p D_p^-1, x_p += dt v_pic, and L_p, F_p, V_p
     from v_new. REMAP: v_p and C_p only, v_pic into `rate`, and the new momentum
     m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:
     L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.
     bad[t]: first particle of block t whose J = det F is not positive."""
-    S = len(support)
-    mode, affine, blend = len(variant[0]), len(variant[1]) == 1, len(variant[2]) == 1
     threads = copies_mom.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
+    remaps = mode_.ndim - 1 == REMAP
     d_inv0, d_inv1 = 4.0 * inv_h[0] * inv_h[0], 4.0 * inv_h[1] * inv_h[1]   # quadratic B-splines: D_p = h^2/4
     for t in prange(threads):
+        S, affine, blend = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2   # compile-time constants
+        mode = mode_.ndim - 1
         gp = grid_mom
         if mode == REMAP and t > 0:
             gp = copies_mom[t - 1]
@@ -251,7 +259,7 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                 dy = (j - fy) * h[1]
                 row = (iy + j) * strides[1] - offset
                 for i in range(S):
-                    node = row + (ix + i) * strides[0]
+                    node = row + ix + i   # (strides[0] is 1: x fastest)
                     w = wx[i] * wy[j]
                     vx, vy = v_new[node, 0], v_new[node, 1]
                     if mode == KINEMATICS:
@@ -296,7 +304,7 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                     dy = (j - fy) * h[1]
                     row = (iy + j) * strides[1] - offset
                     for i in range(S):
-                        node = row + (ix + i) * strides[0]
+                        node = row + ix + i   # (strides[0] is 1: x fastest)
                         mw = m * (wx[i] * wy[j])
                         px, py = v[p, 0], v[p, 1]
                         if affine:
@@ -322,20 +330,21 @@ def g2p_2d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
             volume[p] = J * volume0[p]
             if J <= 0.0 and bad[t] < 0:
                 bad[t] = p
-    if mode == REMAP and copies_mom.shape[0] > 0:
+    if remaps and copies_mom.shape[0] > 0:
         add_momentum_copies(grid_mom, copies_mom)
 
 
 @njit(parallel=True, cache=True)
-def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, strides, offset,
+def g2p_3d(support, mode_, affine_, blend_, x, v, C, flip, dt, mass, lower, h, inv_h, cells, strides, offset,
            v_old, v_new, L, F, volume, volume0, rate, grid_mom, copies_mom, bad):
     """g2p_2d in 3D."""
-    S = len(support)
-    mode, affine, blend = len(variant[0]), len(variant[1]) == 1, len(variant[2]) == 1
     threads = copies_mom.shape[0] + 1
     bounds = block_bounds(x.shape[0], threads)
+    remaps = mode_.ndim - 1 == REMAP
     d_inv0, d_inv1, d_inv2 = 4.0 * inv_h[0] * inv_h[0], 4.0 * inv_h[1] * inv_h[1], 4.0 * inv_h[2] * inv_h[2]
     for t in prange(threads):
+        S, affine, blend = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2   # compile-time constants
+        mode = mode_.ndim - 1
         gp = grid_mom
         if mode == REMAP and t > 0:
             gp = copies_mom[t - 1]
@@ -355,7 +364,7 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                     row = (iy + j) * strides[1] + (iz + k) * strides[2] - offset
                     wyz, gyz, wygz = wy[j] * wz[k], gy[j] * wz[k], wy[j] * gz[k]
                     for i in range(S):
-                        node = row + (ix + i) * strides[0]
+                        node = row + ix + i   # (strides[0] is 1: x fastest)
                         w = wx[i] * wyz
                         vx, vy, vz = v_new[node, 0], v_new[node, 1], v_new[node, 2]
                         if mode != KINEMATICS:
@@ -410,7 +419,7 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
                         dy = (j - fy) * h[1]
                         row = (iy + j) * strides[1] + (iz + k) * strides[2] - offset
                         for i in range(S):
-                            node = row + (ix + i) * strides[0]
+                            node = row + ix + i   # (strides[0] is 1: x fastest)
                             mw = m * (wx[i] * (wy[j] * wz[k]))
                             px, py, pz = v[p, 0], v[p, 1], v[p, 2]
                             if affine:
@@ -442,5 +451,5 @@ def g2p_3d(support, variant, x, v, C, flip, dt, mass, lower, h, inv_h, cells, st
             volume[p] = J * volume0[p]
             if J <= 0.0 and bad[t] < 0:
                 bad[t] = p
-    if mode == REMAP and copies_mom.shape[0] > 0:
+    if remaps and copies_mom.shape[0] > 0:
         add_momentum_copies(grid_mom, copies_mom)

@@ -78,7 +78,7 @@ class ExplicitMPM:
         self.fused = fused.applies(scene) and type(self) is ExplicitMPM
         if self.fused:
             self._step = {"usl": self._step_usl_fused, "musl": self._step_musl_fused}[method.scheme]
-            self._support = fused.support_spec(method.shape_function)
+            self._support = fused.support_of(method.shape_function)
         else:
             self._step = {"usl": self._step_usl, "musl": self._step_musl, "usf": self._step_usf}[method.scheme]
         # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
@@ -242,7 +242,8 @@ class ExplicitMPM:
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernel = fused.p2g_2d if self.scene.dimension == 2 else fused.p2g_3d
         bad = np.empty(self.threads, dtype=np.int64)
-        kernel(self._support, self._variant(fused.USL), p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
+        kernel(self._support, fused.constant(self.affine is not None), fused.constant(self.loads.any),
+               p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
                acc, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset,
                g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
         outside = fused.first(bad)
@@ -253,14 +254,12 @@ class ExplicitMPM:
         p, g, f = self.particles, self.grid, self.frame
         kernel = fused.g2p_2d if self.scene.dimension == 2 else fused.g2p_3d
         bad = np.empty(self.threads, dtype=np.int64)
-        kernel(self._support, self._variant(mode), p.x, p.v, self._affine_matrix,
+        kernel(self._support, fused.constant(mode), fused.constant(self.affine is not None),
+               fused.constant(self.flip_ratio > 0.0), p.x, p.v, self._affine_matrix,
                self.flip_ratio, dt,
                p.mass, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset, g.v_old, g.v_new, p.L, p.F,
                p.volume, p.volume0, self.rate, g.momentum, self.copies.momentum, bad)
         self._check_inversion(fused.first(bad))
-
-    def _variant(self, mode: int) -> tuple:
-        return fused.variant_spec(mode, self.affine is not None, self.flip_ratio > 0.0, self.loads.any)
 
     @property
     def _affine_matrix(self) -> np.ndarray:
