@@ -171,6 +171,50 @@ def startup_seconds() -> float:
         return time.perf_counter() - start
 
 
+def breakdown(dim: int, cells: int, repeats: int = 5) -> dict:
+    """Where the solver's step spends its time, per particle and phase (one thread),
+    beside the whole step of the numba MLS reference."""
+    import numba
+
+    from solver import fused, kernels
+
+    sim = ExplicitMPM(load_scene(mls_block_scene(dim, cells, 1)))
+    p, g = sim.particles, sim.grid
+    model = sim.materials[0][0]
+    reference = ReferenceMLS(p.x, p.v, p.mass, p.volume, cells, model.lam, model.mu, 1)
+    numba.set_num_threads(1)
+    for _ in range(2):
+        sim.advance(MLS_DT)
+        reference.advance(MLS_DT)
+    tiny = 1e-12   # phases timed on their own must not move the particles
+    phases = {
+        "P2G (mass, momentum with APIC, force)": lambda: (g.reset(), sim._fused_p2g()),
+        "grid update and boundary conditions": lambda: (kernels.integrate_nodes(
+            tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new), sim._impose(g.v_new)),
+        "G2P (v, C, x; L, F, V)": lambda: sim._fused_g2p(tiny, fused.USL),
+        "material (neo-Hookean stress)": lambda: sim._update_materials(tiny),
+        "whole step (with the checks and the energy accounting)": lambda: sim.advance(tiny),
+        "numba MLS reference, whole step": lambda: reference.advance(tiny),
+    }
+    best = {name: np.inf for name in phases}
+    reps = max(3, int(3e5 / p.count))
+    for _ in range(repeats):
+        for name, phase in phases.items():
+            start = time.perf_counter()
+            for _ in range(reps):
+                phase()
+            best[name] = min(best[name], (time.perf_counter() - start) / reps / p.count * 1e9)
+    return {"dimension": dim, "particles": p.count, "ns_per_particle": best}
+
+
+def print_breakdown(rows: list[dict]) -> None:
+    print("where a step's time goes, ns per particle, one thread")
+    for r in rows:
+        print(f"  {r['dimension']}D block, {r['particles']:,} particles")
+        for name, ns in r["ns_per_particle"].items():
+            print(f"    {name:<58}{ns:8.1f}")
+
+
 def print_side_by_side(rows: list[dict]) -> None:
     print("part 1: the same elastic-block step (quadratic B-splines, APIC, neo-Hookean, float64), "
           "M particle-steps/s")
@@ -206,6 +250,9 @@ def main() -> int:
     side = [side_by_side(dim, cells, threads, steps, args.frameworks_python, warp_rate)
             for dim, cells, steps in blocks for threads in args.threads]
     print_side_by_side(side)
+    parts = [breakdown(dim, cells) for dim, cells in ((2, blocks[0][1]), (3, blocks[2 if len(blocks) > 2 else 1][1]))]
+    print()
+    print_breakdown(parts)
     rows, start = [], None
     if not args.skip_part2:
         rows = [measure(dim, cells, steps, repeats) for dim, cells, steps in cases]
@@ -219,7 +266,8 @@ def main() -> int:
         start = startup_seconds()
         print(f"start-up to the end of the first step, warm cache: {start:.2f} s")
     if args.json:
-        args.json.write_text(json.dumps({"side_by_side": side, "rows": rows, "startup_seconds": start}, indent=2))
+        args.json.write_text(json.dumps({"side_by_side": side, "breakdown": parts, "rows": rows,
+                                         "startup_seconds": start}, indent=2))
     return 0
 
 
