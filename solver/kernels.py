@@ -329,6 +329,24 @@ def kinetic_energy(mass, vel):
 
 
 @njit(cache=True)
+def external_power(mass, acc, vel):
+    """sum_p m_p b_p . v_p, `acc` per particle or one shared row (as in p2g).
+
+    Serial, so the same sum for any thread count; one pass without the temporaries
+    of the numpy expression, which took 10 % of a two-thread step."""
+    n, dim = vel.shape
+    shared_acc = acc.shape[0] == 1
+    e = 0.0
+    for p in range(n):
+        ap = 0 if shared_acc else p
+        s = 0.0
+        for a in range(dim):
+            s += acc[ap, a] * vel[p, a]
+        e += mass[p] * s
+    return e
+
+
+@njit(cache=True)
 def max_speed_per_axis(vel):
     n, dim = vel.shape
     out = np.zeros(dim)

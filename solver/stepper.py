@@ -320,7 +320,7 @@ class ExplicitMPM:
         if not self.loads.any:
             return
         p = self.particles
-        self.external_work += dt * float(np.sum(p.mass[:, None] * self._acceleration * p.v))
+        self.external_work += dt * kernels.external_power(p.mass, self._acceleration, p.v)
 
     def _fail(self, index: int, quantity: str, detail: str) -> None:
         """Raise Instability (processes: once every process has reached the same point)."""
