@@ -23,27 +23,39 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+from solver.kernels import add_node_copies, own
+from solver.threads import block_bounds
 
 
-@njit(cache=True)
-def add_hoop_force(spec, idx, w, lower_r, h_r, nodes_r, first_r, volume, stress, grid_force):
-    """f_rI -= V_p sigma_thth,p N_I(x_p) / r_p (the third term of eq. G.2)."""
+@njit(parallel=True, cache=True)
+def add_hoop_force(spec, idx, w, lower_r, h_r, nodes_r, first_r, volume, stress, grid_force, copies_force):
+    """f_rI -= V_p sigma_thth,p N_I(x_p) / r_p (the third term of eq. G.2); block t of
+    particles adds into copies_force[t - 1] (solver/kernels.py)."""
     n = w.shape[0]
-    nk = len(spec[1])
-    for p in range(n):
-        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
-        s = volume[p] * stress[p, 2, 2] / r
-        for k in range(nk):
-            grid_force[idx[p, k], 0] -= w[p, k] * s
+    nodes = spec[1]   # len() taken inside the prange: constants there (solver/kernels.py)
+    blocks = copies_force.shape[0] + 1
+    bounds = block_bounds(n, blocks)
+    for t in prange(blocks):
+        nk = len(nodes)
+        gf = own(t, grid_force, copies_force)
+        for p in range(bounds[t], bounds[t + 1]):
+            r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
+            s = volume[p] * stress[p, 2, 2] / r
+            for k in range(nk):
+                gf[idx[p, k], 0] -= w[p, k] * s
+    if blocks > 1:
+        add_node_copies(grid_force, copies_force)
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def hoop_kinematics(spec, idx, w, lower_r, h_r, nodes_r, first_r, v_grid, dt, L, F, volume):
     """L_thth = sum_I N_I v_rI / r_p (eq. G.4); F_thth and the volume follow."""
     n = w.shape[0]
-    nk = len(spec[1])
-    for p in range(n):
+    nodes = spec[1]
+    for p in prange(n):   # no scratch, each particle its own rows
+        nk = len(nodes)
         r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
         vr = 0.0
         for k in range(nk):
@@ -82,8 +94,9 @@ class Axisymmetry:
         """The grid of this process, whose first node layer along r is layer first_r of the whole grid."""
         self._r = (self._lower_r, self._h_r, int(grid.cells[0]) + 1, first_r)
 
-    def add_forces(self, spec, stencil, particles, grid_force) -> None:
-        add_hoop_force(spec, stencil.idx, stencil.w, *self._r, particles.volume, particles.stress, grid_force)
+    def add_forces(self, spec, stencil, particles, grid_force, copies_force) -> None:
+        add_hoop_force(spec, stencil.idx, stencil.w, *self._r, particles.volume, particles.stress, grid_force,
+                       copies_force)
 
     def kinematics(self, spec, stencil, particles, v_grid, dt: float) -> None:
         p = particles

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from solver import shape
+
 from solver.state import make_stencil
 
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))   # xx yy zz yz xz xy
@@ -30,7 +32,7 @@ def through_grid(sim, values: np.ndarray) -> np.ndarray:
     The weights are those of the particles' current positions."""
     p, g = sim.particles, sim.grid
     s = make_stencil(p.count, p.dimension, sim.shape.SUPPORT)
-    sim.shape.weights(sim.spec, p.x, g.lower, g.inv_h, g.cells, g.strides, s.idx, s.w, s.dw)
+    shape.evaluate(sim.shape, sim.spec, p.x, p, g, s)
     mw = p.mass[:, None] * s.w
     node_mass = np.bincount(s.idx.ravel(), mw.ravel(), minlength=g.n_nodes)
     node_sum = np.bincount(s.idx.ravel(), (mw * values[:, None]).ravel(), minlength=g.n_nodes)

@@ -15,7 +15,7 @@ log rows.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver.expressions import compile_expression
 from solver.state import grid_geometry
@@ -30,6 +30,8 @@ def mark_nodes(spec, index, x, body, lower, inv_h, cells, strides, node_body, no
 
     Writes nodes[i], bodies[i] and first[i] (that particle) and returns how many.
     node_body must be -1 everywhere on entry; the caller resets the marked entries afterwards.
+    Serial, like `impose`: which particle reaches a node first depends on the order, and
+    impose's sums would change with it; rigid particles and their nodes are few.
     """
     dim, corners = len(spec[0]), 1 << len(spec[0])
     count = 0
@@ -74,10 +76,10 @@ def impose(nodes, bodies, velocity, imposed, grid_mass, v, record, impulse):
     return work
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def move_particles(index, body, start, dt, velocity, x, v, F, stress):
     """Rigid particles at start + dt v_b (eq. 4.7) with velocity v_b, F = I and no stress."""
-    for i in range(index.shape[0]):
+    for i in prange(index.shape[0]):   # no scratch, each particle its own rows
         p = index[i]
         b = body[p]
         for a in range(x.shape[1]):

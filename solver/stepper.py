@@ -140,12 +140,12 @@ class ExplicitMPM:
         self.materials = [(self._model_of[name], sl) for name, sl in slices.items()]
 
     def _step_musl(self, dt: float) -> None:
-        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
+        p, g, s, c, halo = self.particles, self.grid, self.stencil, self.copies, self.domain
         self._interpolation_weights()                                   # phi_I(x_p), grad phi_I(x_p)
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc,
-                    g.mass, g.momentum, g.force)                        # lines 8-12: m_I, (mv)_I, f_I
+                    g.mass, g.momentum, g.force, c.mass, c.momentum, c.force)   # lines 8-12: m_I, (mv)_I, f_I
         self._add_hoop_forces()
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum, g.force)                    # (processes: ghost nodes to owners)
@@ -157,7 +157,7 @@ class ExplicitMPM:
         g.momentum.fill(0.0)
         self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
-                    p.x, p.v, p.mass, True, g.momentum)                 # lines 18-20: x_p, v_p, (mv)_I again
+                    p.x, p.v, p.mass, True, g.momentum, c.momentum)     # lines 18-20: x_p, v_p, (mv)_I again
         halo.sum_ghosts(g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)   # line 24: v_I^{t+dt}
         self._impose(g.v_new)                                           # line 21
@@ -165,11 +165,12 @@ class ExplicitMPM:
         self._update_stress(dt, g.v_new)                                # lines 25-28: L, F, V, sigma
 
     def _step_usl(self, dt: float) -> None:
-        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
+        p, g, s, c, halo = self.particles, self.grid, self.stencil, self.copies, self.domain
         self._interpolation_weights()
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
-        kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force)
+        kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume, p.stress, acc, g.mass, g.momentum, g.force,
+                    c.mass, c.momentum, c.force)
         self._add_hoop_forces()
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum, g.force)
@@ -179,14 +180,14 @@ class ExplicitMPM:
         halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
-                    p.x, p.v, p.mass, False, g.momentum)                # particles from v_I^{t+dt}
+                    p.x, p.v, p.mass, False, g.momentum, c.momentum)    # particles from v_I^{t+dt}
         self._update_stress(dt, g.v_new)                                # stress last, from v_I^{t+dt}
 
     def _step_usf(self, dt: float) -> None:
-        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
+        p, g, s, c, halo = self.particles, self.grid, self.stencil, self.copies, self.domain
         self._interpolation_weights()
         g.reset()
-        kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+        kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum, c.mass, c.momentum)
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
@@ -194,7 +195,7 @@ class ExplicitMPM:
         halo.share_nodes(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self._acceleration = self.loads.acceleration(p, self.time)
-        kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force)
+        kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume, p.stress, acc, g.force, c.force)
         self._add_hoop_forces()
         halo.sum_ghosts(g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
@@ -203,7 +204,7 @@ class ExplicitMPM:
         halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
-                    p.x, p.v, p.mass, False, g.momentum)
+                    p.x, p.v, p.mass, False, g.momentum, c.momentum)
 
     def _step_usl_fused(self, dt: float) -> None:
         g, halo = self.grid, self.domain
@@ -276,12 +277,13 @@ class ExplicitMPM:
 
     def _affine_p2g(self) -> None:
         if self.affine is not None:
-            self.affine.p2g(self.spec, self.stencil, self.particles, self.particles.x, self.grid.momentum)
+            self.affine.p2g(self.spec, self.stencil, self.particles, self.particles.x, self.grid.momentum,
+                            self.copies.momentum)
 
     def _affine_g2p(self, v_grid: np.ndarray, double_map: bool) -> None:
         if self.affine is not None:
             self.affine.g2p(self.spec, self.stencil, self.particles, self.particles.x, v_grid, double_map,
-                            self.grid.momentum)
+                            self.grid.momentum, self.copies.momentum)
 
     def _impose(self, v: np.ndarray, record: bool = False) -> float:
         """Prescribed nodal velocities: rigid bodies, then boundary conditions (which win where
@@ -293,12 +295,12 @@ class ExplicitMPM:
 
     def _add_hoop_forces(self) -> None:
         if self.axisymmetry is not None:
-            self.axisymmetry.add_forces(self.spec, self.stencil, self.particles, self.grid.force)
+            self.axisymmetry.add_forces(self.spec, self.stencil, self.particles, self.grid.force, self.copies.force)
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil
         self._check_inversion(kernels.update_kinematics(self.spec, s.idx, s.dw, v_grid, dt, p.L, p.F,
-                                                        p.volume, p.volume0))
+                                                        p.volume, p.volume0, self.threads))
         if self.axisymmetry is not None:
             self.axisymmetry.kinematics(self.spec, s, p, v_grid, dt)
         self._update_materials(dt)
@@ -317,7 +319,7 @@ class ExplicitMPM:
         if not self.loads.any:
             return
         p = self.particles
-        self.external_work += dt * float(np.sum(p.mass[:, None] * self._acceleration * p.v))
+        self.external_work += dt * kernels.external_power(p.mass, self._acceleration, p.v)
 
     def _fail(self, index: int, quantity: str, detail: str) -> None:
         """Raise Instability (processes: once every process has reached the same point)."""

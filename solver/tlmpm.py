@@ -29,10 +29,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver import kernels
 from solver.stepper import ExplicitMPM
+from solver.threads import block_bounds
 
 
 class TotalLagrangianMPM(ExplicitMPM):
@@ -41,12 +42,12 @@ class TotalLagrangianMPM(ExplicitMPM):
     # -- the step (Algorithm 3; USL and USF differ from MUSL as in ULMPM) --------
 
     def _step_musl(self, dt: float) -> None:
-        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
+        p, g, s, c, halo = self.particles, self.grid, self.stencil, self.copies, self.domain
         g.reset()     # m_I comes out the same every step: the weights are fixed (F18)
         acc = self._acceleration = self.loads.acceleration(p, self.time)
-        first_piola(p.F, p.stress, self.piola)                          # P = J sigma F^-T
+        first_piola(p.F, p.stress, self.piola, self.threads)            # P = J sigma F^-T
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume0, self.piola, acc,
-                    g.mass, g.momentum, g.force)                        # lines 9-12: (mv)_I, f_I with V0, P
+                    g.mass, g.momentum, g.force, c.mass, c.momentum, c.force)   # lines 9-12: (mv)_I, f_I with V0, P
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum, g.force)                    # (processes: ghost nodes to owners)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force,
@@ -57,7 +58,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         g.momentum.fill(0.0)
         self._affine_g2p(g.v_new, True)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
-                    p.x, p.v, p.mass, True, g.momentum)                 # lines 18-19, 28: v_p, (mv)_I, x_p
+                    p.x, p.v, p.mass, True, g.momentum, c.momentum)     # lines 18-19, 28: v_p, (mv)_I, x_p
         halo.sum_ghosts(g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_new)
         self._impose(g.v_new)                                           # line 20
@@ -65,12 +66,12 @@ class TotalLagrangianMPM(ExplicitMPM):
         self._update_stress(dt, g.v_new)                                # lines 23-27: F_dot, F, L, sigma
 
     def _step_usl(self, dt: float) -> None:
-        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
+        p, g, s, c, halo = self.particles, self.grid, self.stencil, self.copies, self.domain
         g.reset()
         acc = self._acceleration = self.loads.acceleration(p, self.time)
-        first_piola(p.F, p.stress, self.piola)
+        first_piola(p.F, p.stress, self.piola, self.threads)
         kernels.p2g(self.spec, s.idx, s.w, s.dw, p.mass, p.v, p.volume0, self.piola, acc,
-                    g.mass, g.momentum, g.force)
+                    g.mass, g.momentum, g.force, c.mass, c.momentum, c.force)
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum, g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
@@ -79,13 +80,13 @@ class TotalLagrangianMPM(ExplicitMPM):
         halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
-                    p.x, p.v, p.mass, False, g.momentum)
+                    p.x, p.v, p.mass, False, g.momentum, c.momentum)
         self._update_stress(dt, g.v_new)                                # from v~_I^{t+dt}
 
     def _step_usf(self, dt: float) -> None:
-        p, g, s, halo = self.particles, self.grid, self.stencil, self.domain
+        p, g, s, c, halo = self.particles, self.grid, self.stencil, self.copies, self.domain
         g.reset()
-        kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+        kernels.p2g_mass_momentum(self.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum, c.mass, c.momentum)
         self._affine_p2g()
         halo.sum_ghosts(g.mass, g.momentum)
         kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
@@ -93,8 +94,8 @@ class TotalLagrangianMPM(ExplicitMPM):
         halo.share_nodes(g.v_old)
         self._update_stress(dt, g.v_old)                                # stress first, from v_I^t
         acc = self._acceleration = self.loads.acceleration(p, self.time)
-        first_piola(p.F, p.stress, self.piola)
-        kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume0, self.piola, acc, g.force)
+        first_piola(p.F, p.stress, self.piola, self.threads)
+        kernels.p2g_force(self.spec, s.idx, s.w, s.dw, p.mass, p.volume0, self.piola, acc, g.force, c.force)
         halo.sum_ghosts(g.force)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, self.mass_cutoff, g.v_old, g.v_new)
         self._impose(g.v_old)
@@ -102,7 +103,7 @@ class TotalLagrangianMPM(ExplicitMPM):
         halo.share_nodes(g.v_old, g.v_new)
         self._affine_g2p(g.v_new, False)
         kernels.g2p(self.spec, s.idx, s.w, dt, self.flip_ratio, g.v_old, g.v_new,
-                    p.x, p.v, p.mass, False, g.momentum)
+                    p.x, p.v, p.mass, False, g.momentum, c.momentum)
 
     # -- phases -----------------------------------------------------------------
 
@@ -139,16 +140,18 @@ class TotalLagrangianMPM(ExplicitMPM):
 
     def _affine_p2g(self) -> None:
         if self.affine is not None:
-            self.affine.p2g(self.spec, self.stencil, self.particles, self.particles.X, self.grid.momentum)
+            self.affine.p2g(self.spec, self.stencil, self.particles, self.particles.X, self.grid.momentum,
+                            self.copies.momentum)
 
     def _affine_g2p(self, v_grid: np.ndarray, double_map: bool) -> None:
         if self.affine is not None:
             self.affine.g2p(self.spec, self.stencil, self.particles, self.particles.X, v_grid, double_map,
-                            self.grid.momentum)
+                            self.grid.momentum, self.copies.momentum)
 
     def _update_stress(self, dt: float, v_grid: np.ndarray) -> None:
         p, s = self.particles, self.stencil
-        inverted = update_deformation(self.spec, s.idx, s.dw, v_grid, dt, p.F, p.L, p.volume, p.volume0)
+        inverted = update_deformation(self.spec, s.idx, s.dw, v_grid, dt, p.F, p.L, p.volume, p.volume0,
+                                      self.threads)
         if inverted >= 0:
             J = float(np.linalg.det(p.F[inverted]))
             self._fail(inverted, "J = det F", f"{J:.6g} <= 0 (the material point has inverted)")
@@ -181,16 +184,23 @@ def invert(A, out):
     return det
 
 
-@njit(cache=True)
-def first_piola(F, stress, P):
+@njit(parallel=True, cache=True)
+def first_piola(F, stress, P, blocks):
     """P = J sigma F^-T (review Table 4) on the in-plane block.
 
     In plane strain F_zz = 1 and F^-T has no zz coupling with the plane, so the
     in-plane block of P needs only the in-plane blocks of sigma and F.
     """
-    n, dim = F.shape[0], F.shape[1]
-    Finv = np.empty((dim, dim))
-    for p in range(n):
+    bounds = block_bounds(F.shape[0], blocks)
+    for t in prange(blocks):
+        _piola_block(bounds[t], bounds[t + 1], F, stress, P)
+
+
+@njit(cache=True)
+def _piola_block(start, stop, F, stress, P):
+    dim = F.shape[1]
+    Finv = np.empty((dim, dim))   # allocated per block (solver/kernels.py)
+    for p in range(start, stop):
         J = invert(F[p], Finv)
         for a in range(dim):
             for b in range(dim):
@@ -200,19 +210,28 @@ def first_piola(F, stress, P):
                 P[p, a, b] = J * s
 
 
-@njit(cache=True)
-def update_deformation(spec, idx, dw0, v_grid, dt, F, L, volume, volume0):
+@njit(parallel=True, cache=True)
+def update_deformation(spec, idx, dw0, v_grid, dt, F, L, volume, volume0, blocks):
     """F_dot = sum_I v_I (x) grad0 phi_I, F <- F + dt F_dot, L = F_dot F^-1, V = J V0
     (Algorithm 3, lines 23-25).
 
     Returns the index of the first particle whose J = det F is not positive, or -1.
     """
-    n = idx.shape[0]
-    dim, nk = len(spec[0]), len(spec[1])
+    dims, nodes = spec
+    bounds = block_bounds(idx.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _deformation_block(dims, nodes, bounds[t], bounds[t + 1], idx, dw0, v_grid, dt, F, L, volume, volume0)
+    return kernels.first_of(bad)
+
+
+@njit(cache=True)
+def _deformation_block(dims, nodes, start, stop, idx, dw0, v_grid, dt, F, L, volume, volume0):
+    dim, nk = len(dims), len(nodes)
     Fdot = np.empty((dim, dim))
     Finv = np.empty((dim, dim))
     bad = -1
-    for p in range(n):
+    for p in range(start, stop):
         Fdot[:, :] = 0.0
         for k in range(nk):
             node = idx[p, k]

@@ -36,7 +36,10 @@ call them too.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+from solver.kernels import add_node_copies, own
+from solver.threads import block_bounds
 
 AFFINE = "affine"   # Particles.extra: (n, dim, dim) C_p
 
@@ -49,33 +52,53 @@ class AffineTransfer:
         particles.require(AFFINE, (grid.h.shape[0], grid.h.shape[0]))
         self.node_x = grid.node_positions()
 
-    def p2g(self, spec, stencil, particles, x, grid_mom) -> None:
-        affine_p2g(spec, stencil.idx, stencil.w, particles.mass, x, particles.extra[AFFINE], self.node_x, grid_mom)
+    def p2g(self, spec, stencil, particles, x, grid_mom, copies_mom) -> None:
+        affine_p2g(spec, stencil.idx, stencil.w, particles.mass, x, particles.extra[AFFINE], self.node_x, grid_mom,
+                   copies_mom)
 
-    def g2p(self, spec, stencil, particles, x, v_grid, double_map: bool, grid_mom) -> None:
+    def g2p(self, spec, stencil, particles, x, v_grid, double_map: bool, grid_mom, copies_mom) -> None:
         """C_p from the grid velocities; with `double_map` (MUSL) also the affine part
         of the momentum mapped back to the grid (call before kernels.g2p moves x)."""
         affine_g2p(spec, stencil.idx, stencil.w, v_grid, x, particles.mass, self.node_x,
-                   particles.extra[AFFINE], double_map, grid_mom)
+                   particles.extra[AFFINE], double_map, grid_mom, copies_mom)
 
 
-@njit(cache=True)
-def affine_p2g(spec, idx, w, mass, x, C, node_x, grid_mom):
-    """grid_mom_I += sum_p m_p w_Ip C_p (x_I - x_p)."""
-    for p in range(w.shape[0]):
-        affine_p2g_one(p, spec, idx, w, mass, x, C, node_x, grid_mom)
+@njit(parallel=True, cache=True)
+def affine_p2g(spec, idx, w, mass, x, C, node_x, grid_mom, copies_mom):
+    """grid_mom_I += sum_p m_p w_Ip C_p (x_I - x_p); block t of particles adds into
+    copies_mom[t - 1] (solver/kernels.py), so there are copies + 1 blocks."""
+    dims, nodes = spec
+    blocks = copies_mom.shape[0] + 1
+    bounds = block_bounds(w.shape[0], blocks)
+    for t in prange(blocks):
+        gp = own(t, grid_mom, copies_mom)
+        for p in range(bounds[t], bounds[t + 1]):
+            affine_p2g_one(p, dims, nodes, idx, w, mass, x, C, node_x, gp)
+    if blocks > 1:
+        add_node_copies(grid_mom, copies_mom)
 
 
-@njit(cache=True)
-def affine_g2p(spec, idx, w, v_grid, x, mass, node_x, C, double_map, grid_mom):
+@njit(parallel=True, cache=True)
+def affine_g2p(spec, idx, w, v_grid, x, mass, node_x, C, double_map, grid_mom, copies_mom):
     """C_p = B_p D_p^-1 (D_p diagonal); with double_map also adds the new affine
     momentum m_p w_Ip C_p (x_I - x_p) to grid_mom."""
-    n = w.shape[0]
-    dim, nk = len(spec[0]), len(spec[1])
+    dims, nodes = spec
+    blocks = copies_mom.shape[0] + 1
+    bounds = block_bounds(w.shape[0], blocks)
+    for t in prange(blocks):
+        gp = own(t, grid_mom, copies_mom) if double_map else grid_mom
+        _affine_g2p_block(dims, nodes, bounds[t], bounds[t + 1], idx, w, v_grid, x, mass, node_x, C, double_map, gp)
+    if double_map and blocks > 1:
+        add_node_copies(grid_mom, copies_mom)
+
+
+@njit(cache=True)
+def _affine_g2p_block(dims, nodes, start, stop, idx, w, v_grid, x, mass, node_x, C, double_map, grid_mom):
+    dim, nk = len(dims), len(nodes)
     B = np.empty((dim, dim))
     D = np.empty(dim)
     d = np.empty(dim)
-    for p in range(n):
+    for p in range(start, stop):
         B[:, :] = 0.0
         D[:] = 0.0
         for k in range(nk):
@@ -92,12 +115,12 @@ def affine_g2p(spec, idx, w, v_grid, x, mass, node_x, C, double_map, grid_mom):
             for b in range(dim):
                 C[p, a, b] = B[a, b] / D[b]
         if double_map:
-            affine_p2g_one(p, spec, idx, w, mass, x, C, node_x, grid_mom)
+            affine_p2g_one(p, dims, nodes, idx, w, mass, x, C, node_x, grid_mom)
 
 
 @njit(cache=True)
-def affine_p2g_one(p, spec, idx, w, mass, x, C, node_x, grid_mom):
-    dim, nk = len(spec[0]), len(spec[1])
+def affine_p2g_one(p, dims, nodes, idx, w, mass, x, C, node_x, grid_mom):
+    dim, nk = len(dims), len(nodes)
     for k in range(nk):
         node = idx[p, k]
         mw = mass[p] * w[p, k]

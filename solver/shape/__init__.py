@@ -3,12 +3,13 @@
 A shape function module provides `SUPPORT` (nodes per axis that a particle
 touches) and a numba kernel
 
-    weights(spec, x, lower, inv_h, cells, strides, idx, w, dw) -> int
+    weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks) -> int
 
 filling, for every particle p and every node k of its stencil, the flat node
-index idx[p, k], the weight w[p, k] and the gradient dw[p, k, :]. It returns the
-index of the first particle outside the grid (or whose stencil would need a node
-beyond the grid), or -1. `spec` makes the dimension and stencil size
+index idx[p, k], the weight w[p, k] and the gradient dw[p, k, :], in `blocks`
+contiguous blocks of particles run on as many threads (solver/threads.py; any
+count gives the same bits). It returns the index of the first particle outside
+the grid (or whose stencil would need a node beyond the grid), or -1. `spec` makes the dimension and stencil size
 compile-time constants (kernels.stencil_spec). Stencil node k has the per-axis
 offsets (k // SUPPORT**a) % SUPPORT from the particle's first node, axis 0
 fastest. Node numbers must be sum_a i_a * strides[a] with i_a the node's index
@@ -20,7 +21,7 @@ the same for every shape function.
 
 A function that needs per-particle data (GIMP's particle sizes) also provides
 `prepare(scene, particles)`, which allocates it in `Particles.extra`, and
-`evaluate(spec, x, particles, grid, stencil)`, which calls its kernel with it.
+`evaluate(spec, x, particles, grid, stencil, blocks)`, which calls its kernel with it.
 Callers use the module-level `prepare` and `evaluate` below, which fall back to
 the plain kernel.
 
@@ -37,6 +38,7 @@ from __future__ import annotations
 
 from types import ModuleType, SimpleNamespace
 
+import numba
 import numpy as np
 
 from solver.shape import bernstein, cubic_bspline, gimp, linear, quadratic_bspline
@@ -70,8 +72,10 @@ def prepare(module, scene, particles) -> None:
 
 def evaluate(module, spec, x: np.ndarray, particles, grid, stencil) -> int:
     """Weights and gradients at positions x (the particles' current or reference
-    positions) into the stencil; the first particle outside the grid, or -1."""
+    positions) into the stencil; the first particle outside the grid, or -1.
+    One block of particles per thread of this process (set by threads.configure)."""
+    blocks = numba.get_num_threads()
     if hasattr(module, "evaluate"):
-        return module.evaluate(spec, x, particles, grid, stencil)
+        return module.evaluate(spec, x, particles, grid, stencil, blocks)
     return module.weights(spec, x, grid.lower, grid.inv_h, grid.cells, grid.strides,
-                          stencil.idx, stencil.w, stencil.dw)
+                          stencil.idx, stencil.w, stencil.dw, blocks)

@@ -13,9 +13,11 @@ the grid needs at least 3 cells per axis (scene validation).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
+from solver.kernels import first_of
 from solver.shape.tensor import scatter
+from solver.threads import block_bounds
 
 SUPPORT = 4
 
@@ -53,14 +55,24 @@ def node_type(j, cells):
     return 3, 1.0
 
 
+@njit(parallel=True, cache=True)
+def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    dims = spec[0]
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _block(dims, bounds[t], bounds[t + 1], x, lower, inv_h, cells, strides, idx, w, dw)
+    return first_of(bad)
+
+
 @njit(cache=True)
-def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw):
-    n = x.shape[0]
-    dim = len(spec[0])
+def _block(dims, start, stop, x, lower, inv_h, cells, strides, idx, w, dw):
+    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
+    dim = len(dims)
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, 4))
     g1 = np.empty((dim, 4))
-    for p in range(n):
+    for p in range(start, stop):
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
             if not (s >= 0.0 and s <= cells[a]):   # also catches NaN

@@ -27,9 +27,11 @@ reported as outside.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
+from solver.kernels import first_of
 from solver.shape.tensor import scatter
+from solver.threads import block_bounds
 
 SUPPORT = 3
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
@@ -45,24 +47,24 @@ def prepare(scene, particles) -> None:
     length[:] = np.asarray(scene.cell_sizes())[None, :] / ppc[particles.body][:, None]
 
 
-def evaluate(spec, x, particles, grid, stencil) -> int:
+def evaluate(spec, x, particles, grid, stencil, blocks) -> int:
     """uGIMP: the initial boxes."""
     return weights(spec, x, particles.extra[LENGTH], grid.lower, grid.inv_h, grid.cells, grid.strides,
-                   stencil.idx, stencil.w, stencil.dw)
+                   stencil.idx, stencil.w, stencil.dw, blocks)
 
 
-def evaluate_contiguous(spec, x, particles, grid, stencil) -> int:
+def evaluate_contiguous(spec, x, particles, grid, stencil, blocks) -> int:
     """cpGIMP: the boxes stretched along the axes by the diagonal of F."""
     length = stretched(particles.extra[LENGTH], particles.F)
     return weights(spec, x, length, grid.lower, grid.inv_h, grid.cells, grid.strides,
-                   stencil.idx, stencil.w, stencil.dw)
+                   stencil.idx, stencil.w, stencil.dw, blocks)
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def stretched(length0, F):
     n, dim = length0.shape
     out = np.empty((n, dim))
-    for p in range(n):
+    for p in prange(n):   # no scratch, each particle its own row
         for a in range(dim):
             out[p, a] = length0[p, a] * abs(F[p, a, a])
     return out
@@ -80,16 +82,26 @@ def hat_and_integral(y):
     return 0.0, 1.0
 
 
-@njit(cache=True)
-def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw):
+@njit(parallel=True, cache=True)
+def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """The shape-function interface with one more argument: `length` (n, dim), the
     current box sides l_p (capped at h)."""
-    n = x.shape[0]
-    dim = len(spec[0])
+    dims = spec[0]
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _block(dims, bounds[t], bounds[t + 1], x, length, lower, inv_h, cells, strides, idx, w, dw)
+    return first_of(bad)
+
+
+@njit(cache=True)
+def _block(dims, start, stop, x, length, lower, inv_h, cells, strides, idx, w, dw):
+    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
+    dim = len(dims)
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, 3))
     g1 = np.empty((dim, 3))
-    for p in range(n):
+    for p in range(start, stop):
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
             if not (s >= 0.0 and s <= cells[a]):   # also catches NaN

@@ -7,19 +7,32 @@ is the cell-crossing noise of standard MPM (review 3.2).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+from solver.kernels import first_of
+from solver.threads import block_bounds
 
 SUPPORT = 2  # nodes per axis
 
 
+@njit(parallel=True, cache=True)
+def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    dims, nodes = spec
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _block(dims, nodes, bounds[t], bounds[t + 1], x, lower, inv_h, cells, strides, idx, w, dw)
+    return first_of(bad)
+
+
 @njit(cache=True)
-def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw):
-    n = x.shape[0]
-    dim, nk = len(spec[0]), len(spec[1])
+def _block(dims, nodes, start, stop, x, lower, inv_h, cells, strides, idx, w, dw):
+    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
+    dim, nk = len(dims), len(nodes)
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, 2))   # 1D weights of the two nodes, per axis
     g1 = np.empty((dim, 2))   # their derivatives
-    for p in range(n):
+    for p in range(start, stop):
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
             if not (s >= 0.0 and s <= cells[a]):   # also catches NaN

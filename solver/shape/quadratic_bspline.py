@@ -9,22 +9,34 @@ outside the grid (keep one free cell between bodies and the grid ends).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
+from solver.kernels import first_of
 from solver.shape.tensor import scatter
+from solver.threads import block_bounds
 
 SUPPORT = 3
 _TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
 
+@njit(parallel=True, cache=True)
+def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    dims = spec[0]
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _block(dims, bounds[t], bounds[t + 1], x, lower, inv_h, cells, strides, idx, w, dw)
+    return first_of(bad)
+
+
 @njit(cache=True)
-def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw):
-    n = x.shape[0]
-    dim = len(spec[0])
+def _block(dims, start, stop, x, lower, inv_h, cells, strides, idx, w, dw):
+    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
+    dim = len(dims)
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, 3))
     g1 = np.empty((dim, 3))
-    for p in range(n):
+    for p in range(start, stop):
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
             if not (s >= 0.5 - _TOUCH and s <= cells[a] - 0.5 + _TOUCH):   # also catches NaN

@@ -161,7 +161,8 @@ def test_gimp_reduces_to_hat_functions_for_small_boxes():
     stencil = make_stencil(3, 1, 3)
     spec = kernels.stencil_spec(1, 3)
     length = np.full((3, 1), 1e-6 * grid.h[0])
-    module.weights(spec, x, length, grid.lower, grid.inv_h, grid.cells, grid.strides, stencil.idx, stencil.w, stencil.dw)
+    module.weights(spec, x, length, grid.lower, grid.inv_h, grid.cells, grid.strides,
+                   stencil.idx, stencil.w, stencil.dw, 1)
     d = (x - grid.node_positions()[stencil.idx][:, :, 0]) * grid.inv_h[0]
     np.testing.assert_allclose(stencil.w, np.maximum(0.0, 1.0 - np.abs(d[:, :, 0] if d.ndim == 3 else d)), atol=1e-6)
 

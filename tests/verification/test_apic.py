@@ -55,10 +55,11 @@ def grid_angular_momentum(sim: ExplicitMPM) -> float:
     s = make_stencil(p.count, p.dimension, sim.shape.SUPPORT)   # (the fused step keeps none)
     assert shape.evaluate(sim.shape, sim.spec, p.x, p, g, s) == -1
     g.reset()
-    kernels.p2g_mass_momentum(sim.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum)
+    c = sim.copies
+    kernels.p2g_mass_momentum(sim.spec, s.idx, s.w, p.mass, p.v, g.mass, g.momentum, c.mass, c.momentum)
     x = g.node_positions()
     if AFFINE in p.extra:
-        affine_p2g(sim.spec, s.idx, s.w, p.mass, p.x, p.extra[AFFINE], x, g.momentum)
+        affine_p2g(sim.spec, s.idx, s.w, p.mass, p.x, p.extra[AFFINE], x, g.momentum, c.momentum)
     return float(np.sum(x[:, 0] * g.momentum[:, 1] - x[:, 1] * g.momentum[:, 0]))
 
 

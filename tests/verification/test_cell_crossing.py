@@ -25,9 +25,16 @@ import pytest
 
 from solver import kernels, shape
 from solver.state import Grid, make_stencil
+from solver.threads import ScatterCopies
 
 H, V, SIGMA, CELLS = 1.0, 0.5, 3.0, 8
 MAX_SECOND_DERIVATIVE = {"gimp": 4.0 / H**2, "quadratic_bspline": 2.0 / H**2, "cubic_bspline": 2.0 / H**2}
+
+
+def no_copies(n_nodes: int, dim: int) -> tuple:
+    """The P2G kernels' per-thread copies for one thread: none (they add into the grid)."""
+    c = ScatterCopies(n_nodes, dim, 1)
+    return c.mass, c.momentum, c.force
 
 
 def grid_1d() -> Grid:
@@ -48,7 +55,7 @@ def internal_forces(name: str, x: np.ndarray) -> np.ndarray:
     stress = np.zeros((n, 3, 3))
     stress[:, 0, 0] = SIGMA
     kernels.p2g(spec, stencil.idx, stencil.w, stencil.dw, np.ones(n), np.zeros((n, 1)), np.full(n, V), stress,
-                np.zeros((1, 1)), grid.mass, grid.momentum, grid.force)
+                np.zeros((1, 1)), grid.mass, grid.momentum, grid.force, *no_copies(grid.n_nodes, 1))
     return grid.force[:, 0]
 
 

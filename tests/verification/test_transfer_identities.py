@@ -7,8 +7,15 @@ import pytest
 
 from solver import kernels
 from solver.shape import linear
+from solver.threads import ScatterCopies
 
 ROUND_OFF = 1e-12
+
+
+def no_copies(n_nodes: int, dim: int) -> tuple:
+    """The P2G kernels' per-thread copies for one thread: none (they add into the grid)."""
+    c = ScatterCopies(n_nodes, dim, 1)
+    return c.mass, c.momentum, c.force
 
 
 def make_grid(dim, cells=6, h=0.25, lower=-0.5):
@@ -31,7 +38,7 @@ def stencil(x, lower, h, cells, strides):
     idx = np.zeros((n, nk), np.int64)
     w = np.zeros((n, nk))
     dw = np.zeros((n, nk, dim))
-    outside = linear.weights(kernels.stencil_spec(dim, nk), x, lower, 1.0 / h, cells, strides, idx, w, dw)
+    outside = linear.weights(kernels.stencil_spec(dim, nk), x, lower, 1.0 / h, cells, strides, idx, w, dw, 1)
     return outside, idx, w, dw
 
 
@@ -91,7 +98,8 @@ def test_p2g_conserves_mass_and_momentum(dim):
     _, idx, w, dw = stencil(x, lower, h, cells, strides)
     n_nodes = int(np.prod(cells + 1))
     gm, gp, gf = np.zeros(n_nodes), np.zeros((n_nodes, dim)), np.zeros((n_nodes, dim))
-    kernels.p2g(kernels.stencil_spec(dim, w.shape[1]), idx, w, dw, mass, vel, volume, stress, acc, gm, gp, gf)
+    kernels.p2g(kernels.stencil_spec(dim, w.shape[1]), idx, w, dw, mass, vel, volume, stress, acc, gm, gp, gf,
+                *no_copies(n_nodes, dim))
     assert gm.sum() == pytest.approx(mass.sum(), rel=ROUND_OFF)
     np.testing.assert_allclose(gp.sum(axis=0), (mass[:, None] * vel).sum(axis=0), rtol=ROUND_OFF, atol=ROUND_OFF * n)
     # internal forces are equal and opposite inside the body: they sum to zero
@@ -111,7 +119,8 @@ def test_cell_crossing_internal_force_jump():
         stress[:, 0, 0] = sigma
         _, idx, w, dw = stencil(x, lower, h, cells, strides)
         gm, gp, gf = np.zeros(3), np.zeros((3, 1)), np.zeros((3, 1))
-        kernels.p2g(kernels.stencil_spec(1, 2), idx, w, dw, np.ones(n), np.zeros((n, 1)), np.full(n, V), stress, np.zeros((1, 1)), gm, gp, gf)
+        kernels.p2g(kernels.stencil_spec(1, 2), idx, w, dw, np.ones(n), np.zeros((n, 1)), np.full(n, V), stress,
+                    np.zeros((1, 1)), gm, gp, gf, *no_copies(3, 1))
         return gf[1, 0]
 
     assert force_on_middle_node([0.25, 0.75, 1.25, 1.75]) == pytest.approx(0.0, abs=1e-15)
