@@ -22,11 +22,15 @@ from __future__ import annotations
 
 import os
 
-# numba's OpenMP threads spin after each parallel loop by default, waiting for the next one.
-# On a machine whose cores are shared (the serial phases of the step, other processes, MPI
-# ranks polling), the spinning threads take the core the main thread needs: measured, a
-# serial kernel ran 50x slower between parallel ones. Passive waiting costs a wake-up per loop.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+# Between parallel loops numba's OpenMP threads spin, then sleep. Spinning for long
+# (libgomp's default) took the core that the serial phases of the step needed on a
+# shared, loaded machine (a serial kernel ran 50x slower); sleeping at once
+# (OMP_WAIT_POLICY=PASSIVE) costs a wake-up per loop, and two threads ran the 2D
+# block of benchmarks/throughput.py only 1.25x faster than one. A short spin, about
+# the length of the serial gaps in a step, gave 1.85x (docs/benchmarks.md, "Threads").
+# An environment that sets either variable keeps its own.
+if "OMP_WAIT_POLICY" not in os.environ:
+    os.environ.setdefault("GOMP_SPINCOUNT", "100000")
 
 import numba  # noqa: E402  (after the policy: OpenMP reads it when numba first starts its threads)
 import numpy as np  # noqa: E402
