@@ -40,17 +40,17 @@ def _update(L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_lin
     """Internal energy and stress of every particle; returns the largest sound speed."""
     n, dim = L.shape[0], L.shape[1]
     bounds = block_bounds(n, threads)
-    scratch = np.empty((threads, dim, dim))   # one per thread: allocated here, not hoisted by numba
     c2_block = np.zeros(threads)
     for t in prange(threads):
         c2_block[t] = _update_block(bounds[t], bounds[t + 1], L, mass, volume, energy, stress, dt, gamma, cell,
-                                    c_quadratic, c_linear, scratch[t])
+                                    c_quadratic, c_linear)
     return math.sqrt(c2_block.max())
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_linear, step):
+def _update_block(lo, hi, L, mass, volume, energy, stress, dt, gamma, cell, c_quadratic, c_linear):
     dim = L.shape[1]
+    step = np.empty((dim, dim))   # per block, in this serial function: never shared between threads
     c2_max = 0.0
     for p in range(lo, hi):
         tr = 0.0

@@ -26,14 +26,14 @@ from solver.threads import block_bounds
 @njit(parallel=True, cache=True)
 def _update(L, stress, eps_p, dt, K, G, yield_stress, H, threads):
     bounds = block_bounds(L.shape[0], threads)
-    scratch = np.empty((threads, 5, 3, 3))   # D, W, Q, tmp, s of each thread
     for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, dt, K, G, yield_stress, H, scratch[t])
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, dt, K, G, yield_stress, H)
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, dt, K, G, yield_stress, H, scratch):
-    D, W, Q, tmp, s = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
+def _update_block(lo, hi, L, stress, eps_p, dt, K, G, yield_stress, H):
+    # scratch per block, in this serial function: never shared between threads (nor in one cache line)
+    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
         objective.rate_tensors(L[p], D, W)
         objective.rotate(stress[p], W, dt, Q, tmp)

@@ -103,18 +103,18 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm
             threads):
     """Update the particles' stress and state; returns the largest wave speed (K_t + 4/3 G') / rho."""
     bounds = block_bounds(L.shape[0], threads)
-    scratch = np.empty((threads, 5, 3, 3))   # D, W, Q, tmp, s of each thread
     fastest = np.zeros(threads)
     for t in prange(threads):
         fastest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, mass, volume, eps_p, eps_rate, T, dmg,
-                                   d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm, scratch[t])
+                                   d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm)
     return math.sqrt(fastest.max())
 
 
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
-                  fail_prm, scratch):
-    D, W, Q, tmp, s = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
+                  fail_prm):
+    # scratch per block, in this serial function: never shared between threads (nor in one cache line)
+    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     damaged = dmg.shape[0] > 0
     accumulates = d_init.shape[0] > 0
     fastest = 0.0
@@ -164,18 +164,18 @@ def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_in
     return fastest   # squared: one square root for all particles
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def _energy(stress, mass, volume, dmg, G, rho0, eos_prm, out):
-    s = np.empty((3, 3))
     damaged = dmg.shape[0] > 0
-    for p in range(stress.shape[0]):
-        objective.split(stress[p], s)
+    for p in prange(stress.shape[0]):
         d = dmg[p] if damaged else 0.0
         g = (1.0 - d) * G
-        ss = 0.0
+        mean = (stress[p, 0, 0] + stress[p, 1, 1] + stress[p, 2, 2]) / 3.0
+        ss = 0.0   # s:s of the deviator s = sigma - mean I
         for a in range(3):
             for b in range(3):
-                ss += s[a, b] * s[a, b]
+                sab = stress[p, a, b] - (mean if a == b else 0.0)
+                ss += sab * sab
         mu = mass[p] / (volume[p] * rho0) - 1.0
         shear = volume[p] * ss / (4.0 * g) if g > 0.0 else 0.0
         volumetric = mass[p] / rho0 * eos.stored_energy(eos_prm, mu)
