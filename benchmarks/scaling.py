@@ -151,7 +151,7 @@ def johnson_cook_block(cells: int) -> dict:
     scene = block_scene(3, cells)
     taylor = json.loads((ROOT / "examples" / "taylor_bar_3d.json").read_text())
     scene["materials"] = {"m": taylor["materials"]["copper"]}
-    scene["time"]["dt"] = 1e-9
+    scene["time"] = {"end": 1e-6, "dt": 1e-9}
     return scene
 
 
