@@ -9,9 +9,10 @@ is written once and read three times a step. Here the weights are recomputed
 where they are needed, from the same formulas in the same order, so a fused
 step gives the general step's answer to round-off (tests/unit/test_fused.py):
 
-    USL:   p2g -> grid update -> g2p_kinematics (v, C, x, L, F, V) -> material
-    MUSL:  p2g -> grid update -> g2p_remap (v, C; momentum back to the grid)
-           -> nodal velocity -> kinematics (L, F, V from the remapped velocity; x) -> material
+    USL:   p2g -> grid update -> g2p, mode USL (v, C, x, L, F, V) -> material
+    MUSL:  p2g -> grid update -> g2p, mode REMAP (v, C; momentum back to the grid)
+           -> nodal velocity -> g2p, mode KINEMATICS (L, F, V from the remapped
+           velocity; x) -> material
 
 Each kernel runs one contiguous block of particles per thread; P2G scatters
 into per-thread copies of the nodal arrays, summed afterwards (solver/threads.py).
@@ -23,7 +24,7 @@ specialisation per array type, so inside the threads' loops these are
 compile-time constants and the branches of the other variants fold away. Plain
 arguments would be runtime values there (numba passes what a prange loop uses to
 the threads' function as arguments; measured, runtime flags made P2G 20 %
-slower), and tuples, whose length would say the same, cannot be passed in.
+slower), and an empty tuple, whose length would say the same, cannot be passed in.
 """
 from __future__ import annotations
 

@@ -54,8 +54,8 @@ class ExplicitMPM:
     def __init__(self, scene):
         self.scene = scene
         method = scene.method
-        self.threads = threads.configure(scene)
         self.particles, slices = make_particles(scene)
+        self.threads = threads.configure(scene, self.particles.count)   # (every process seeds every particle)
         # Every process seeded every particle: the models are made (and their particles'
         # state started) once, here, and reused whatever particles a process holds later.
         self.materials = make_materials(scene, slices, self.particles)

@@ -90,7 +90,8 @@ def run_solver(command: list[str], log_path: Path, *,
                progress_interval: float = 0.5,
                poll_interval: float = 0.25,
                grace_seconds: float = 10.0,
-               timeout_seconds: float | None = None) -> Outcome:
+               timeout_seconds: float | None = None,
+               env: dict[str, str] | None = None) -> Outcome:
     """Run `command` to its end, or until `should_stop()` names a reason to stop it.
 
     `should_stop` is polled every `poll_interval` seconds until the command has exited;
@@ -106,7 +107,7 @@ def run_solver(command: list[str], log_path: Path, *,
     with open(log_path, "a", encoding="utf-8") as log:
         process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=log, text=True,
                                    start_new_session=True, preexec_fn=die_with_parent,
-                                   cwd=log_path.parent)
+                                   cwd=log_path.parent, env=env)
         reader = threading.Thread(target=_read_lines, args=(process.stdout, lines, log), daemon=True)
         reader.start()
         output_open = True

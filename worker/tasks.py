@@ -14,6 +14,7 @@ failed with the reason; a job whose results outgrow the disk limits is failed to
 from __future__ import annotations
 
 import logging
+import os
 import shutil
 import threading
 import time
@@ -145,7 +146,7 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
             command, files.log, on_progress=on_progress, should_stop=should_stop,
             progress_interval=settings.progress_interval,
             grace_seconds=settings.cancel_grace_seconds,
-            timeout_seconds=settings.max_job_seconds)
+            timeout_seconds=settings.max_job_seconds, env=_job_environment(settings))
         if not _killed(outcome):
             break
         lost += 1
@@ -184,6 +185,17 @@ def _retry_redis(call, seconds: float = 300.0):
             log.warning("redis unavailable, retrying: %s", exc)
             time.sleep(1.0)
 
+
+
+def _job_environment(settings: Settings) -> dict[str, str]:
+    """The solver's environment: each of the jobs this worker runs at once gets its share
+    of the cores for its threads (MPM_CORES, solver/threads.py), unless the operator set
+    it (several workers on one machine)."""
+    env = dict(os.environ)
+    if "MPM_CORES" not in env:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        env["MPM_CORES"] = str(max(1, cores // settings.worker_concurrency))
+    return env
 
 def _finish(store: JobStore, job_id: str, files: JobFiles, outcome: Outcome, settings: Settings,
             quota: DiskQuota) -> None:
