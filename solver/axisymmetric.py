@@ -25,8 +25,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from solver.kernels import add_node_copies, own
-from solver.threads import block_bounds
+from solver.threads import add_node_copies, block_bounds, own
 
 
 @njit(parallel=True, cache=True)

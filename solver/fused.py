@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit, prange
 
 from solver.kernels import determinant
-from solver.threads import add_copies, add_momentum_copies, block_bounds
+from solver.threads import add_copies, add_node_copies, block_bounds, own
 
 FUSED_SHAPES = {"linear": 2, "quadratic_bspline": 3}
 _TOUCH = 1e-9   # as solver/shape/quadratic_bspline.py: round-off allowance at h/2 from a grid end
@@ -82,27 +82,9 @@ def _axis(S, x, lower, inv_h, cells):
 
 
 @njit(cache=True)
-def _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force):
-    """Thread t's nodal arrays: the grid's own for thread 0, a zeroed copy otherwise."""
-    if t == 0:
-        return grid_mass, grid_mom, grid_force
-    m, p, f = copies_mass[t - 1], copies_mom[t - 1], copies_force[t - 1]
-    m[:] = 0.0
-    p[:, :] = 0.0
-    f[:, :] = 0.0
-    return m, p, f
-
-
-@njit(cache=True)
 def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force):
     if copies_mass.shape[0] > 0:
         add_copies(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
-
-
-def first(bad):
-    """The lowest particle index any block reported, or -1."""
-    hits = bad[bad >= 0]
-    return int(hits.min()) if hits.size else -1
 
 
 # -- P2G ---------------------------------------------------------------------------
@@ -117,7 +99,7 @@ def p2g_2d(support, affine_, loaded_, x, v, C, mass, volume, stress, acc, lower,
     shared_acc = acc.shape[0] == 1
     for t in prange(threads):
         S, affine, loaded = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2   # compile-time constants
-        gm, gp, gf = _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+        gm, gp, gf = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom), own(t, grid_force, copies_force)
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
             okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
@@ -169,7 +151,7 @@ def p2g_3d(support, affine_, loaded_, x, v, C, mass, volume, stress, acc, lower,
     shared_acc = acc.shape[0] == 1
     for t in prange(threads):
         S, affine, loaded = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2   # compile-time constants
-        gm, gp, gf = _copies(t, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+        gm, gp, gf = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom), own(t, grid_force, copies_force)
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
             okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
@@ -245,10 +227,7 @@ def g2p_2d(support, mode_, affine_, blend_, x, v, C, flip, dt, mass, lower, h, i
     for t in prange(threads):
         S, affine, blend = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2   # compile-time constants
         mode = mode_.ndim - 1
-        gp = grid_mom
-        if mode == REMAP and t > 0:
-            gp = copies_mom[t - 1]
-            gp[:, :] = 0.0
+        gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
             _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
@@ -332,7 +311,7 @@ def g2p_2d(support, mode_, affine_, blend_, x, v, C, flip, dt, mass, lower, h, i
             if J <= 0.0 and bad[t] < 0:
                 bad[t] = p
     if remaps and copies_mom.shape[0] > 0:
-        add_momentum_copies(grid_mom, copies_mom)
+        add_node_copies(grid_mom, copies_mom)
 
 
 @njit(parallel=True, cache=True)
@@ -346,10 +325,7 @@ def g2p_3d(support, mode_, affine_, blend_, x, v, C, flip, dt, mass, lower, h, i
     for t in prange(threads):
         S, affine, blend = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2   # compile-time constants
         mode = mode_.ndim - 1
-        gp = grid_mom
-        if mode == REMAP and t > 0:
-            gp = copies_mom[t - 1]
-            gp[:, :] = 0.0
+        gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom
         bad[t] = -1
         for p in range(bounds[t], bounds[t + 1]):
             _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
@@ -453,4 +429,4 @@ def g2p_3d(support, mode_, affine_, blend_, x, v, C, flip, dt, mass, lower, h, i
             if J <= 0.0 and bad[t] < 0:
                 bad[t] = p
     if remaps and copies_mom.shape[0] > 0:
-        add_momentum_copies(grid_mom, copies_mom)
+        add_node_copies(grid_mom, copies_mom)

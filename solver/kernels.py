@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.threads import add_copies, block_bounds
+from solver.threads import add_copies, add_node_copies, block_bounds, first_of, own
 
 
 def stencil_spec(dim: int, nodes_per_particle: int) -> tuple:
@@ -141,26 +141,6 @@ def _force_block(dims, nodes, start, stop, idx, w, dw, mass, volume, stress, acc
                 for b in range(dim):
                     f -= vol * stress[p, a, b] * dw[p, k, b]
                 grid_force[node, a] += f
-
-
-@njit(cache=True)
-def own(t, grid_array, copies):
-    """The array block t adds into: the grid's own for block 0, its zeroed copy otherwise."""
-    if t == 0:
-        return grid_array
-    mine = copies[t - 1]
-    mine.fill(0.0)
-    return mine
-
-
-@njit(parallel=True, cache=True)
-def add_node_copies(grid_array, copies):
-    """grid_array += the sum of its copies (n_nodes or (n_nodes, dim)), node by node."""
-    flat = grid_array.reshape(-1)
-    copies_flat = copies.reshape(copies.shape[0], -1)
-    for i in prange(flat.shape[0]):
-        for t in range(copies_flat.shape[0]):
-            flat[i] += copies_flat[t, i]
 
 
 @njit(cache=True)
@@ -294,15 +274,6 @@ def _kinematics_block(dims, nodes, start, stop, idx, dw, v_grid, dt, L, F, volum
         if J <= 0.0 and bad < 0:
             bad = p
     return bad
-
-
-@njit(cache=True)
-def first_of(bad):
-    """The lowest particle index any block reported (blocks are in particle order), or -1."""
-    for b in bad:
-        if b >= 0:
-            return b
-    return -1
 
 
 @njit(cache=True)

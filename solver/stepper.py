@@ -247,7 +247,7 @@ class ExplicitMPM:
                p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
                acc, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset,
                g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
-        outside = fused.first(bad)
+        outside = threads.first_of(bad)
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
@@ -260,7 +260,7 @@ class ExplicitMPM:
                self.flip_ratio, dt,
                p.mass, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset, g.v_old, g.v_new, p.L, p.F,
                p.volume, p.volume0, self.rate, g.momentum, self.copies.momentum, bad)
-        self._check_inversion(fused.first(bad))
+        self._check_inversion(threads.first_of(bad))
 
     @property
     def _affine_matrix(self) -> np.ndarray:

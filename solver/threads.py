@@ -88,7 +88,6 @@ class ScatterCopies:
 
     def __init__(self, n_nodes: int, dim: int, threads: int):
         extra = threads - 1
-        self.threads = threads
         self.mass = np.zeros((extra, n_nodes))
         self.momentum = np.zeros((extra, n_nodes, dim))
         self.force = np.zeros((extra, n_nodes, dim))
@@ -106,10 +105,30 @@ def add_copies(mass, momentum, force, copies_mass, copies_momentum, copies_force
                 force[i, a] += copies_force[t, i, a]
 
 
+@njit(cache=True)
+def own(t, grid_array, copies):
+    """The array block t adds into: the grid's own for block 0, its zeroed copy otherwise."""
+    if t == 0:
+        return grid_array
+    mine = copies[t - 1]
+    mine.fill(0.0)
+    return mine
+
+
 @njit(parallel=True, cache=True)
-def add_momentum_copies(momentum, copies_momentum):
-    n, dim = momentum.shape
-    for i in numba.prange(n):
-        for t in range(copies_momentum.shape[0]):
-            for a in range(dim):
-                momentum[i, a] += copies_momentum[t, i, a]
+def add_node_copies(grid_array, copies):
+    """grid_array += the sum of its copies (n_nodes or (n_nodes, dim)), node by node."""
+    flat = grid_array.reshape(-1)
+    copies_flat = copies.reshape(copies.shape[0], -1)
+    for i in numba.prange(flat.shape[0]):
+        for t in range(copies_flat.shape[0]):
+            flat[i] += copies_flat[t, i]
+
+
+@njit(cache=True)
+def first_of(bad):
+    """The lowest particle index any block reported (blocks are in particle order), or -1."""
+    for b in bad:
+        if b >= 0:
+            return b
+    return -1

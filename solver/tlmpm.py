@@ -33,7 +33,7 @@ from numba import njit, prange
 
 from solver import kernels
 from solver.stepper import ExplicitMPM
-from solver.threads import block_bounds
+from solver.threads import block_bounds, first_of
 
 
 class TotalLagrangianMPM(ExplicitMPM):
@@ -222,7 +222,7 @@ def update_deformation(spec, idx, dw0, v_grid, dt, F, L, volume, volume0, blocks
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
         bad[t] = _deformation_block(dims, nodes, bounds[t], bounds[t + 1], idx, dw0, v_grid, dt, F, L, volume, volume0)
-    return kernels.first_of(bad)
+    return first_of(bad)
 
 
 @njit(cache=True)

@@ -38,8 +38,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.kernels import add_node_copies, own
-from solver.threads import block_bounds
+from solver.threads import add_node_copies, block_bounds, own
 
 AFFINE = "affine"   # Particles.extra: (n, dim, dim) C_p
 

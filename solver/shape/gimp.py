@@ -29,9 +29,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.kernels import first_of
 from solver.shape.tensor import scatter
-from solver.threads import block_bounds
+from solver.threads import block_bounds, first_of
 
 SUPPORT = 3
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0

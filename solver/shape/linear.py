@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.kernels import first_of
-from solver.threads import block_bounds
+from solver.threads import block_bounds, first_of
 
 SUPPORT = 2  # nodes per axis
 

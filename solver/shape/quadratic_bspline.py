@@ -11,9 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.kernels import first_of
 from solver.shape.tensor import scatter
-from solver.threads import block_bounds
+from solver.threads import block_bounds, first_of
 
 SUPPORT = 3
 _TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
