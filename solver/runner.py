@@ -204,6 +204,11 @@ def run(
                   result_path=str(out_dir / "result.h5"), out_dir=str(out_dir))
 
 
+def make_simulation(scene: Scene) -> ExplicitMPM:
+    stepper = TotalLagrangianMPM if scene.method.formulation == "tlmpm" else ExplicitMPM
+    return stepper(scene)
+
+
 def _series_stride(scene, sim: ExplicitMPM) -> int:
     """Energies every N steps: the scene's N, or every step up to MAX_SERIES_POINTS points."""
     energies = scene.output.energies

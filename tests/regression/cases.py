@@ -1,0 +1,75 @@
+"""The regression cases: every example, and a matrix of methods on two small scenes.
+
+Each case is a scene, a step count and options: the thread count (results are
+the same bits at the same thread count), and `general` to force the general
+(stored-stencil) kernels on a scene the fused kernels would take.
+"""
+from __future__ import annotations
+
+import copy
+import itertools
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+STEPS = 20
+HEAVY = {"hypervelocity_lead": 8, "taylor_bar_3d": 10, "taylor_bar_3d_tlmpm": 10}   # 19k-37k particles in 3D
+
+
+@dataclass
+class Case:
+    scene: dict
+    steps: int = STEPS
+    threads: int = 1
+    general: bool = False
+    notes: list[str] = field(default_factory=list)
+
+
+def _example(name: str) -> dict:
+    return json.loads((EXAMPLES / f"{name}.json").read_text())
+
+
+def _with(scene: dict, threads: int, **method) -> dict:
+    out = copy.deepcopy(scene)
+    out["method"] = {**out.get("method", {}), **method}
+    out["parallel"] = {**out.get("parallel", {}), "threads": threads}
+    return out
+
+
+def _method_matrix(base: dict, prefix: str, shapes: list[str], formulations=("ulmpm", "tlmpm")) -> dict[str, Case]:
+    cases = {}
+    for formulation, scheme, shape, transfer in itertools.product(
+            formulations, ("usl", "musl", "usf"), shapes, ("flip", "pic", "apic")):
+        if transfer == "apic" and shape == "linear":
+            continue                                   # refused by validation
+        if shape == "bernstein" and formulation != "tlmpm":
+            continue
+        scene = _with(base, 1, formulation=formulation, scheme=scheme, shape_function=shape, transfer=transfer,
+                      flip_ratio=0.95)
+        cases[f"{prefix}-{formulation}-{scheme}-{shape}-{transfer}"] = Case(scene)
+    return cases
+
+
+def cases() -> dict[str, Case]:
+    out: dict[str, Case] = {}
+    for path in sorted(EXAMPLES.glob("*.json")):
+        scene = _example(path.stem)
+        for threads in (1, 2):
+            out[f"example-{path.stem}-t{threads}"] = Case(_with(scene, threads), HEAVY.get(path.stem, STEPS), threads)
+    disks = _example("two_disks")
+    disks["grid"] = {**disks["grid"], "lower": [-0.6, -0.6], "upper": [0.6, 0.6]}   # room for every support
+    out.update(_method_matrix(disks, "disks", ["linear", "gimp", "cpgimp", "quadratic_bspline", "cubic_bspline",
+                                               "bernstein"]))
+    cube = _example("elastic_cube_3d")
+    out.update(_method_matrix(cube, "cube", ["linear", "quadratic_bspline", "cubic_bspline"], ("ulmpm",)))
+    # the general kernels on scenes the fused ones take, at one and two threads
+    for (prefix, base), scheme, shape, transfer, threads in itertools.product(
+            (("disks", disks), ("cube", cube)), ("usl", "musl"), ("linear", "quadratic_bspline"),
+            ("flip", "pic", "apic"), (1, 2)):
+        if transfer == "apic" and shape == "linear":
+            continue
+        scene = _with(base, threads, scheme=scheme, shape_function=shape, transfer=transfer, flip_ratio=0.95)
+        out[f"{prefix}-fused-{scheme}-{shape}-{transfer}-t{threads}"] = Case(scene, threads=threads)
+        out[f"{prefix}-general-{scheme}-{shape}-{transfer}-t{threads}"] = Case(scene, threads=threads, general=True)
+    return out

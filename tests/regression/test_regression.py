@@ -1,0 +1,40 @@
+"""Every example and a matrix of methods give the stored results (tests/regression/baseline.npz).
+
+The baseline was recorded on the commit before the step architecture was rewritten
+(`python tests/regression/record.py`); a refactor must give the same bits at the same
+thread count. Where a change legitimately reorders a sum, the case says so in
+ROUND_OFF with the reason, and is held to 1e-12 of the values instead.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cases import cases
+from snapshot import differences, fingerprint, run_case
+
+BASELINE = Path(__file__).with_name("baseline.npz")
+CASES = cases()
+# case name -> why the order of a summation changed (none so far)
+ROUND_OFF: dict[str, str] = {}
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    with np.load(BASELINE) as stored:
+        return {key: stored[key] for key in stored.files}
+
+
+def test_every_case_has_a_baseline(baseline):
+    recorded = {key.split("/", 1)[0] for key in baseline}
+    assert recorded == set(CASES)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_case_gives_the_stored_result(baseline, name):
+    stored = {key[len(name) + 1:]: value for key, value in baseline.items() if key.startswith(f"{name}/")}
+    fresh = fingerprint(run_case(CASES[name]))
+    problems = differences(stored, fresh, 1e-12 if name in ROUND_OFF else None)
+    assert not problems, "\n".join(problems)
