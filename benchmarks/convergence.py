@@ -40,7 +40,6 @@ from solver.manufactured import (  # noqa: E402
 from solver.norms import DisplacementErrors, observed_orders  # noqa: E402
 from solver.scene import SceneError, load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM, Instability  # noqa: E402
-from solver.tlmpm import TotalLagrangianMPM  # noqa: E402
 
 G = 0.05
 
@@ -99,7 +98,7 @@ def simulate(scene: dict, displacement, samples: int = 21) -> dict:
     time of the steps alone (numba kernels are single-threaded), which on a shared
     machine is what an idle one would take as wall time."""
     scene = load_scene(scene)
-    sim = (TotalLagrangianMPM if scene.method.formulation == "tlmpm" else ExplicitMPM)(scene)
+    sim = ExplicitMPM(scene)
     steps = max(1, round(scene.time.end / scene.time.dt))
     dt = scene.time.end / steps
     p = sim.particles

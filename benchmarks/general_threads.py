@@ -21,7 +21,6 @@ sys.path.insert(0, str(ROOT))
 
 from solver.scene import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
-from solver.tlmpm import TotalLagrangianMPM  # noqa: E402
 
 ELASTIC = {"model": "neo_hookean", "density": 1000.0, "youngs_modulus": 1e6, "poisson_ratio": 0.3}
 
@@ -56,8 +55,7 @@ TLMPM_3D = {
 def make(scene: dict, threads: int):
     scene = {**scene, "parallel": {"processes": 1, "threads": threads}}
     loaded = load_scene(scene)
-    stepper = TotalLagrangianMPM if loaded.method.formulation == "tlmpm" else ExplicitMPM
-    return stepper(loaded)
+    return ExplicitMPM(loaded)
 
 
 def measure(scene: dict, steps: int, repeats: int, counts=(1, 2)) -> dict:

@@ -112,8 +112,7 @@ def measure(cells: int, threads: int, repeats: int) -> dict:
     C = p.extra["affine"]
 
     def copies():
-        g.reset()
-        sim._fused_p2g()
+        sim.phases.particles_to_grid()   # (resets the grid first)
 
     def coloured():
         g.reset()

@@ -176,7 +176,7 @@ def breakdown(dim: int, cells: int, repeats: int = 5) -> dict:
     beside the whole step of the numba MLS reference."""
     import numba
 
-    from solver import fused, kernels
+    from solver import kernels
 
     sim = ExplicitMPM(load_scene(mls_block_scene(dim, cells, 1)))
     p, g = sim.particles, sim.grid
@@ -188,11 +188,11 @@ def breakdown(dim: int, cells: int, repeats: int = 5) -> dict:
         reference.advance(MLS_DT)
     tiny = 1e-12   # phases timed on their own must not move the particles
     phases = {
-        "P2G (mass, momentum with APIC, force)": lambda: (g.reset(), sim._fused_p2g()),
+        "P2G (mass, momentum with APIC, force)": lambda: sim.phases.particles_to_grid(),
         "grid update and boundary conditions": lambda: (kernels.integrate_nodes(
-            tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new), sim._impose(g.v_new)),
-        "G2P (v, C, x; L, F, V)": lambda: sim._fused_g2p(tiny, fused.USL),
-        "material (neo-Hookean stress)": lambda: sim._update_materials(tiny),
+            tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new), sim.phases._constrain(g.v_new)),
+        "G2P (v, C, x; L, F, V)": lambda: sim.phases.grid_to_particles(tiny, remap=False, kinematics=True),
+        "material (neo-Hookean stress)": lambda: sim.phases.stress(tiny),
         "whole step (with the checks and the energy accounting)": lambda: sim.advance(tiny),
         "numba MLS reference, whole step": lambda: reference.advance(tiny),
     }

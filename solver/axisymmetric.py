@@ -93,10 +93,14 @@ class Axisymmetry:
         """The grid of this process, whose first node layer along r is layer first_r of the whole grid."""
         self._r = (self._lower_r, self._h_r, int(grid.cells[0]) + 1, first_r)
 
-    def add_forces(self, spec, stencil, particles, grid_force, copies_force) -> None:
-        add_hoop_force(spec, stencil.idx, stencil.w, *self._r, particles.volume, particles.stress, grid_force,
-                       copies_force)
+    # hooks of the step (solver/step/hooks.py)
 
-    def kinematics(self, spec, stencil, particles, v_grid, dt: float) -> None:
-        p = particles
-        hoop_kinematics(spec, stencil.idx, stencil.w, *self._r, v_grid, dt, p.L, p.F, p.volume)
+    def after_forces(self, sim) -> None:
+        """The hoop stress's nodal force."""
+        s, p = sim.stencil, sim.particles
+        add_hoop_force(sim.spec, s.idx, s.w, *self._r, p.volume, p.stress, sim.grid.force, sim.copies.force)
+
+    def after_kinematics(self, sim, dt: float, v_grid) -> None:
+        """The hoop components of L and F, and the volume with them."""
+        s, p = sim.stencil, sim.particles
+        hoop_kinematics(sim.spec, s.idx, s.w, *self._r, v_grid, dt, p.L, p.F, p.volume)

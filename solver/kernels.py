@@ -231,8 +231,13 @@ def _g2p_block(dims, nodes, start, stop, idx, w, dt, flip_ratio, v_old, v_new, x
 
 
 @njit(parallel=True, cache=True)
-def update_kinematics(spec, idx, dw, v_grid, dt, L, F, volume, volume0, blocks):
-    """L_p = sum_I v_I (x) grad phi_I, F <- (I + L dt) F, V = det(F) V0 (eq. 2.55).
+def update_kinematics(spec, idx, dw, v_grid, dt, L, F, volume, volume0, blocks, reference):
+    """The particles' kinematics from the grid velocity, and V = det(F) V0.
+
+    Update-Lagrangian (`reference` False): L_p = sum_I v_I (x) grad phi_I and
+    F <- (I + L dt) F (eq. 2.55). Total-Lagrangian (True, dw the reference gradients):
+    F_dot = sum_I v_I (x) grad0 phi_I, F <- F + dt F_dot and L = F_dot F^-1
+    (Algorithm 3, lines 23-25), so the materials get L either way.
 
     Returns the index of the first particle whose J = det F is not positive
     (the element has inverted: the run is unstable), or -1.
@@ -241,39 +246,64 @@ def update_kinematics(spec, idx, dw, v_grid, dt, L, F, volume, volume0, blocks):
     bounds = block_bounds(idx.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
-        bad[t] = _kinematics_block(dims, nodes, bounds[t], bounds[t + 1], idx, dw, v_grid, dt, L, F, volume, volume0)
+        bad[t] = _kinematics_block(dims, nodes, bounds[t], bounds[t + 1], idx, dw, v_grid, dt, L, F, volume, volume0,
+                                   reference)
     return first_of(bad)
 
 
 @njit(cache=True)
-def _kinematics_block(dims, nodes, start, stop, idx, dw, v_grid, dt, L, F, volume, volume0):
+def _kinematics_block(dims, nodes, start, stop, idx, dw, v_grid, dt, L, F, volume, volume0, reference):
     dim, nk = len(dims), len(nodes)
-    Lp = np.empty((dim, dim))
-    Fp = np.empty((dim, dim))
+    G = np.empty((dim, dim))   # L_p, or F_dot_p in the reference configuration
+    work = np.empty((dim, dim))
     bad = -1
     for p in range(start, stop):
-        Lp[:, :] = 0.0
+        G[:, :] = 0.0
         for k in range(nk):
             node = idx[p, k]
             for a in range(dim):
                 va = v_grid[node, a]
                 for b in range(dim):
-                    Lp[a, b] += va * dw[p, k, b]
-        for a in range(dim):
-            for b in range(dim):
-                Fp[a, b] = F[p, a, b]
-                L[p, a, b] = Lp[a, b]
-        for a in range(dim):
-            for b in range(dim):
-                s = Fp[a, b]
-                for c in range(dim):
-                    s += dt * Lp[a, c] * Fp[c, b]
-                F[p, a, b] = s
-        J = determinant(F[p])
+                    G[a, b] += va * dw[p, k, b]
+        J = _total_lagrangian(p, G, dt, L, F, work) if reference else _updated_lagrangian(p, G, dt, L, F, work)
         volume[p] = J * volume0[p]
         if J <= 0.0 and bad < 0:
             bad = p
     return bad
+
+
+@njit(cache=True)
+def _updated_lagrangian(p, Lp, dt, L, F, Fp):
+    """L_p = Lp, F_p <- (I + dt Lp) F_p; returns det F_p."""
+    dim = Lp.shape[0]
+    for a in range(dim):
+        for b in range(dim):
+            Fp[a, b] = F[p, a, b]
+            L[p, a, b] = Lp[a, b]
+    for a in range(dim):
+        for b in range(dim):
+            s = Fp[a, b]
+            for c in range(dim):
+                s += dt * Lp[a, c] * Fp[c, b]
+            F[p, a, b] = s
+    return determinant(F[p])
+
+
+@njit(cache=True)
+def _total_lagrangian(p, Fdot, dt, L, F, Finv):
+    """F_p <- F_p + dt Fdot, L_p = Fdot F_p^-1; returns det F_p."""
+    dim = Fdot.shape[0]
+    for a in range(dim):
+        for b in range(dim):
+            F[p, a, b] += dt * Fdot[a, b]
+    J = invert(F[p], Finv)
+    for a in range(dim):
+        for b in range(dim):
+            s = 0.0
+            for c in range(dim):
+                s += Fdot[a, c] * Finv[c, b]
+            L[p, a, b] = s
+    return J
 
 
 @njit(cache=True)
@@ -286,6 +316,29 @@ def determinant(A):
     return (A[0, 0] * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])
             - A[0, 1] * (A[1, 0] * A[2, 2] - A[1, 2] * A[2, 0])
             + A[0, 2] * (A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]))
+
+
+@njit(cache=True)
+def invert(A, out):
+    """out = A^-1 for a 1x1, 2x2 or 3x3 matrix; returns det A (out is garbage when it is 0)."""
+    dim = A.shape[0]
+    det = determinant(A)
+    r = 1.0 / det if det != 0.0 else 0.0
+    if dim == 1:
+        out[0, 0] = r
+    elif dim == 2:
+        out[0, 0] = A[1, 1] * r
+        out[0, 1] = -A[0, 1] * r
+        out[1, 0] = -A[1, 0] * r
+        out[1, 1] = A[0, 0] * r
+    else:
+        for i in range(3):
+            for j in range(3):
+                # cofactor of A[j, i]: the cyclic indices avoid the sign bookkeeping
+                j1, j2 = (j + 1) % 3, (j + 2) % 3
+                i1, i2 = (i + 1) % 3, (i + 2) % 3
+                out[i, j] = (A[j1, i1] * A[j2, i2] - A[j1, i2] * A[j2, i1]) * r
+    return det
 
 
 @njit(cache=True)

@@ -156,10 +156,9 @@ class RigidBodies:
 
     # -- the step -----------------------------------------------------------------
 
-    def begin_step(self, particles, spec, t_end: float) -> None:
+    def begin_step(self, sim, t_end: float) -> None:
         """Mark the nodes of the rigid particles' cells and evaluate the velocities at t_end."""
-        if not self.any:
-            return
+        particles, spec = sim.particles, sim.spec
         self._set_velocity(t_end)
         self._node_body[self._marked] = -1
         index = self._rigid_index(particles)
@@ -191,15 +190,12 @@ class RigidBodies:
         first = order[new_node]
         return local[first], bodies[first]
 
-    def impose(self, grid_mass, v, record: bool) -> float:
-        if not self.any:
-            return 0.0
+    def constrain(self, grid_mass, v, record: bool) -> float:
+        """Impose the bodies' velocities on their marked nodes; returns the work."""
         return impose(self._nodes, self._bodies, self.velocity, self.imposed, grid_mass, v, record, self.impulse)
 
-    def end_step(self, particles, dt: float) -> None:
-        if not self.any:
-            return
-        p = particles
+    def end_step(self, sim, dt: float) -> None:
+        p = sim.particles
         move_particles(self._index, p.body, self._start, dt, self.velocity, p.x, p.v, p.F, p.stress)
         self._elapsed += dt
 

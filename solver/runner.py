@@ -22,7 +22,6 @@ from solver.fields import frame_fields
 from solver.preview import finish_outputs
 from solver.scene import Scene, load_scene
 from solver.stepper import ExplicitMPM, Instability
-from solver.tlmpm import TotalLagrangianMPM
 
 # An energy above this many times what went in (initial energy plus the work of
 # loads and boundary conditions) can only come from a numerical blow-up.
@@ -121,92 +120,112 @@ def run(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = wallclock.perf_counter()
-
-    stepper = TotalLagrangianMPM if scene.method.formulation == "tlmpm" else ExplicitMPM
-    sim = stepper(scene)
-    domain = sim.domain
-    end = scene.time.end
-    frames = _FrameSchedule(end, scene.output.frames)
-    series_every = _series_stride(scene, sim)
-    check_every = min(series_every, CHECK_EVERY)
-    fixed_dt = scene.time.dt
-    energy_floor = ENERGY_FLOOR * sim.energy_scale()
-    initial_energy = sim.energies().total
-
-    reason, message = "finished", ""
-    last_report = started
-    last_energies = {}
-    dt = fixed_dt or sim.stable_time_step(scene.time.cfl)
-    restart = checkpoint.resume(sim, out_dir) if resume else None
+    loop = _TimeLoop(scene, make_simulation(scene), started, progress, should_stop)
+    restart = checkpoint.resume(loop.sim, out_dir) if resume else None
     if restart is not None:
-        dt, frames.next = restart.dt, restart.frame_next
-
+        loop.dt, loop.frames.next = restart.dt, restart.frame_next
+    domain = loop.sim.domain
     writer = domain.writer(out_dir, scene, __version__)   # a ResultWriter on rank 0
     with writer, _StopSignals() as signals:
         checkpoints = checkpoint.Checkpointer(out_dir, scene, checkpoint.Policy.of(scene, checkpoint_seconds),
                                               writer, restart)
-        try:
-            while True:
-                checkpoints.top_of_step(sim, dt, frames.next)
-                if frames.due(sim.time, dt):
-                    fields = domain.gather(frame_fields(sim, scene.output.fields))   # sorted by id
-                    writer.write_frame(sim.step_count, sim.time, fields)
-                    frames.next += 1
-                finished = sim.time >= end - TIME_TOLERANCE * dt
-                if finished or sim.step_count % check_every == 0:
-                    sim.check_finite()
-                    e = sim.energies()
-                    last_energies = {"kinetic": e.kinetic, "strain": e.strain, "total": e.total}
-                    if finished or sim.step_count % series_every == 0:
-                        writer.append_series(time=sim.time, dt=dt, kinetic_energy=e.kinetic,
-                                             strain_energy=e.strain, total_energy=e.total,
-                                             external_work=e.external_work, boundary_work=e.boundary_work,
-                                             **sim.reactions())
-                    supplied = initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0)
-                    if not e.total <= ENERGY_GROWTH_LIMIT * supplied + energy_floor:
-                        raise Instability(sim.step_count, sim.time, None, "total energy",
-                                          f"{e.total:.6g} exceeds {ENERGY_GROWTH_LIMIT:g} x the energy supplied "
-                                          f"({supplied:.6g}): the time step is probably too large")
-                if finished:
-                    break
-                if sim.step_count >= scene.time.max_steps:
-                    reason, message = "max_steps", f"stopped at time.max_steps = {scene.time.max_steps}"
-                    break
-                now = wallclock.perf_counter()
-                asked = signals.requested   # a signal is honoured at the next step (a flag: no cost)
-                if domain.root_says(now - last_report >= PROGRESS_INTERVAL_S):
-                    last_report = now
-                    if progress is not None and domain.is_root:
-                        progress(_progress(sim, end, dt, started, now, last_energies))
-                    asked = asked or (should_stop is not None and should_stop())
-                if domain.any(asked):
-                    reason, message = "cancelled", f"stopped on request at step {sim.step_count}"
-                    break
-
-                dt = fixed_dt or sim.stable_time_step(scene.time.cfl)
-                # land exactly on output times and on the end time
-                to_frame = frames.until_next(sim.time)
-                dt = min(dt, to_frame) if to_frame > TIME_TOLERANCE * dt else dt
-                sim.advance(dt)
-        except Instability as err:
-            reason, message = "unstable", str(err)
-        checkpoints.finish(sim, reason)
+        reason, message = loop.run(writer, checkpoints, signals)
+        checkpoints.finish(loop.sim, reason)
         status = "complete" if reason == "finished" else "partial"
         writer.close(status)
-
     if domain.is_root:
         finish_outputs(out_dir, scene)
     wall = wallclock.perf_counter() - started
-    if progress is not None and domain.is_root:
-        progress(_progress(sim, end, dt, started, wallclock.perf_counter(), last_energies))
-    return Result(status=status, reason=reason, message=message, steps=sim.step_count, time=sim.time,
-                  wall_seconds=wall, particles=int(domain.sum(sim.particles.count)),
+    loop.report(wallclock.perf_counter())
+    return Result(status=status, reason=reason, message=message, steps=loop.sim.step_count, time=loop.sim.time,
+                  wall_seconds=wall, particles=int(domain.sum(loop.sim.particles.count)),
                   result_path=str(out_dir / "result.h5"), out_dir=str(out_dir))
 
 
+class _TimeLoop:
+    """The steps of one run between its start and its end, a stop or an instability."""
+
+    def __init__(self, scene: Scene, sim: ExplicitMPM, started: float, progress, should_stop):
+        self.started = started
+        self.scene, self.sim = scene, sim
+        self.progress, self.should_stop = progress, should_stop
+        self.end = scene.time.end
+        self.frames = _FrameSchedule(self.end, scene.output.frames)
+        self.series_every = _series_stride(scene, sim)
+        self.check_every = min(self.series_every, CHECK_EVERY)
+        self.energy_floor = ENERGY_FLOOR * sim.energy_scale()
+        self.initial_energy = sim.energies().total
+        self.last_report = self.started
+        self.last_energies = {}
+        self.dt = scene.time.dt or sim.stable_time_step(scene.time.cfl)
+
+    def run(self, writer, checkpoints, signals) -> tuple[str, str]:
+        """(reason, message) of the end: finished, max_steps, cancelled or unstable."""
+        sim, scene = self.sim, self.scene
+        try:
+            while True:
+                checkpoints.top_of_step(sim, self.dt, self.frames.next)
+                if self.frames.due(sim.time, self.dt):
+                    fields = sim.domain.gather(frame_fields(sim, scene.output.fields))   # sorted by id
+                    writer.write_frame(sim.step_count, sim.time, fields)
+                    self.frames.next += 1
+                finished = sim.time >= self.end - TIME_TOLERANCE * self.dt
+                if finished or sim.step_count % self.check_every == 0:
+                    self._check(writer, finished)
+                if finished:
+                    return "finished", ""
+                if sim.step_count >= scene.time.max_steps:
+                    return "max_steps", f"stopped at time.max_steps = {scene.time.max_steps}"
+                if self._stop_requested(signals):
+                    return "cancelled", f"stopped on request at step {sim.step_count}"
+                self._advance()
+        except Instability as err:
+            return "unstable", str(err)
+
+    def _check(self, writer, finished: bool) -> None:
+        """Finite state and bounded energy; the energy series row when due."""
+        sim = self.sim
+        sim.check_finite()
+        e = sim.energies()
+        self.last_energies = {"kinetic": e.kinetic, "strain": e.strain, "total": e.total}
+        if finished or sim.step_count % self.series_every == 0:
+            writer.append_series(time=sim.time, dt=self.dt, kinetic_energy=e.kinetic,
+                                 strain_energy=e.strain, total_energy=e.total,
+                                 external_work=e.external_work, boundary_work=e.boundary_work,
+                                 **sim.reactions())
+        supplied = self.initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0)
+        if not e.total <= ENERGY_GROWTH_LIMIT * supplied + self.energy_floor:
+            raise Instability(sim.step_count, sim.time, None, "total energy",
+                              f"{e.total:.6g} exceeds {ENERGY_GROWTH_LIMIT:g} x the energy supplied "
+                              f"({supplied:.6g}): the time step is probably too large")
+
+    def _stop_requested(self, signals) -> bool:
+        """A signal, or the caller's should_stop at a progress report; decided together by all processes."""
+        domain = self.sim.domain
+        now = wallclock.perf_counter()
+        asked = signals.requested   # a signal is honoured at the next step (a flag: no cost)
+        if domain.root_says(now - self.last_report >= PROGRESS_INTERVAL_S):
+            self.last_report = now
+            self.report(now)
+            asked = asked or (self.should_stop is not None and self.should_stop())
+        return domain.any(asked)
+
+    def _advance(self) -> None:
+        sim = self.sim
+        dt = self.scene.time.dt or sim.stable_time_step(self.scene.time.cfl)
+        # land exactly on output times and on the end time
+        to_frame = self.frames.until_next(sim.time)
+        self.dt = min(dt, to_frame) if to_frame > TIME_TOLERANCE * dt else dt
+        sim.advance(self.dt)
+
+    def report(self, now: float) -> None:
+        if self.progress is not None and self.sim.domain.is_root:
+            self.progress(_progress(self.sim, self.end, self.dt, self.started, now, self.last_energies))
+
+
 def make_simulation(scene: Scene) -> ExplicitMPM:
-    stepper = TotalLagrangianMPM if scene.method.formulation == "tlmpm" else ExplicitMPM
-    return stepper(scene)
+    """The particles, grid and step of a validated scene, at t = 0."""
+    return ExplicitMPM(scene)
 
 
 def _series_stride(scene, sim: ExplicitMPM) -> int:

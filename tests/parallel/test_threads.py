@@ -25,7 +25,6 @@ from solver import fused
 from solver.results import read_scene
 from solver.scene import load_scene
 from solver.stepper import ExplicitMPM
-from solver.tlmpm import TotalLagrangianMPM
 
 TOLERANCE = 1e-12
 STEPS = 200
@@ -46,7 +45,7 @@ CASES = {
 
 def run_in_process(case: dict, threads: int):
     loaded = load_scene(scene(case, parallel={"processes": 1, "threads": threads}))
-    sim = (TotalLagrangianMPM if loaded.method.formulation == "tlmpm" else ExplicitMPM)(loaded)
+    sim = ExplicitMPM(loaded)
     assert sim.threads == threads == numba.get_num_threads()
     for _ in range(STEPS):
         sim.advance(case["time"]["dt"])

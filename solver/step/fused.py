@@ -1,0 +1,79 @@
+"""The fused backend: the weights are recomputed inside each transfer instead of
+stored (solver/fused.py), for the scenes most runs are (`supports`): ULMPM with
+linear hats or quadratic B-splines, USL or MUSL, PIC/FLIP/APIC, no hook that needs a
+stored stencil. USL's G2P and kinematics are one pass; MUSL's remap keeps v_pic
+(`rate`) until the kinematics pass moves x_p."""
+from __future__ import annotations
+
+import numpy as np
+
+from solver import fused
+from solver.threads import first_of
+from solver.step.phases import Phases
+
+
+class FusedPhases(Phases):
+    name = "fused"
+
+    @staticmethod
+    def supports(scene) -> bool:
+        return fused.applies(scene)
+
+    def place_particles(self) -> None:
+        sim = self.sim
+        sim.stencil = None
+        sim.rate = np.zeros((sim.particles.count, sim.scene.dimension))
+        sim.formulation.place_particles(sim.particles)
+        self._support = fused.support_of(sim.scene.method.shape_function)
+
+    def weights(self) -> None:
+        """Nothing to store: every kernel evaluates the weights it needs."""
+
+    def _p2g(self, acc: np.ndarray) -> None:
+        sim = self.sim
+        p, g, f, c = sim.particles, sim.grid, sim.frame, sim.copies
+        kernel = fused.p2g_2d if sim.scene.dimension == 2 else fused.p2g_3d
+        bad = np.empty(sim.threads, dtype=np.int64)
+        kernel(self._support, fused.constant(sim.affine is not None), fused.constant(sim.loads.any),
+               p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
+               acc, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset,
+               g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+        outside = first_of(bad)
+        if outside >= 0:
+            sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def grid_to_particles(self, dt: float, remap: bool, kinematics: bool = False) -> None:
+        if remap:
+            self.sim.grid.momentum.fill(0.0)
+            self._g2p(dt, fused.REMAP)                 # v_p, C_p; (mv)_I again; v_pic kept for the move
+        else:
+            assert kinematics, "the fused USL pass moves the particles and updates L, F, V together"
+            self._g2p(dt, fused.USL)                   # v_p, C_p, x_p; L_p, F_p, V_p
+        self._after_g2p(dt)
+        if kinematics:
+            self._after_kinematics(dt, self.sim.grid.v_new)
+
+    def kinematics(self, dt: float, v_grid: np.ndarray) -> None:
+        assert v_grid is self.sim.grid.v_new, "the fused kinematics pass reads v_I^{t+dt}"
+        self._g2p(dt, fused.KINEMATICS)                # L_p, F_p, V_p; x_p += dt v_pic
+        self._after_kinematics(dt, v_grid)
+
+    def _g2p(self, dt: float, mode: int) -> None:
+        sim = self.sim
+        p, g, f = sim.particles, sim.grid, sim.frame
+        kernel = fused.g2p_2d if sim.scene.dimension == 2 else fused.g2p_3d
+        bad = np.empty(sim.threads, dtype=np.int64)
+        kernel(self._support, fused.constant(mode), fused.constant(sim.affine is not None),
+               fused.constant(sim.flip_ratio > 0.0), p.x, p.v, self._affine_matrix,
+               sim.flip_ratio, dt,
+               p.mass, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset, g.v_old, g.v_new, p.L, p.F,
+               p.volume, p.volume0, sim.rate, g.momentum, sim.copies.momentum, bad)
+        sim.check_inversion(first_of(bad))
+
+    @property
+    def _affine_matrix(self) -> np.ndarray:
+        """C_p for APIC; a placeholder of the right type for the kernels otherwise."""
+        sim = self.sim
+        if sim.affine is not None:
+            return sim.particles.extra["affine"]
+        return np.zeros((1, sim.scene.dimension, sim.scene.dimension))

@@ -1,0 +1,118 @@
+"""The phases the schemes (solver/step/schemes.py) are written in, and what every
+backend shares: the grid update, the conditions, the stress update, the hooks and
+the halo.
+
+A backend (the general kernels in solver/step/general.py, the fused ones in
+solver/step/fused.py; a GPU one would be a third) implements the particle phases:
+
+    weights()                             phi_I(x_p), grad phi_I(x_p) where they are stored
+    _p2g(acc)                             m_I, (mv)_I, f_I (with APIC's affine momentum)
+    _p2g_mass_momentum()                  m_I, (mv)_I only (USF)
+    _p2g_force(acc)                       f_I only (USF, after the stress update)
+    grid_to_particles(dt, remap, kinematics)   v_p (and C_p); x_p by the end of kinematics;
+                                          `remap`: (mv)_I again from the new v_p (MUSL);
+                                          `kinematics`: L_p, F_p, V_p from the same v~_I^{t+dt} (USL)
+    kinematics(dt, v_grid)                L_p, F_p, V_p (and x_p where G2P left it) from v_grid
+
+and says which scenes it can run (`supports(scene)`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from solver import kernels
+
+
+class Phases:
+    """The phases of one simulation's step; `sim` holds the state (solver/stepper.py)."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.acceleration = None   # the body acceleration of this step, for the loads' work
+
+    # -- P2G ------------------------------------------------------------------
+
+    def particles_to_grid(self) -> None:
+        """m_I, (mv)_I and f_I = sum_p m_p phi_I b_p - V_p sigma_p grad phi_I (lines 8-12)."""
+        sim = self.sim
+        g = sim.grid
+        g.reset()
+        self._p2g(self._body_acceleration())
+        self._after_forces()
+        sim.domain.sum_ghosts(g.mass, g.momentum, g.force)   # (processes: ghost nodes to owners)
+
+    def mass_momentum_to_grid(self) -> None:
+        """m_I and (mv)_I only: USF's first transfer."""
+        g = self.sim.grid
+        g.reset()
+        self._p2g_mass_momentum()
+        self.sim.domain.sum_ghosts(g.mass, g.momentum)
+
+    def forces_to_grid(self) -> None:
+        """f_I from the stress just updated: USF's second transfer."""
+        g = self.sim.grid
+        self._p2g_force(self._body_acceleration())
+        self._after_forces()
+        self.sim.domain.sum_ghosts(g.force)
+
+    def _body_acceleration(self) -> np.ndarray:
+        sim = self.sim
+        self.acceleration = sim.loads.acceleration(sim.particles, sim.time)
+        return self.acceleration
+
+    def _after_forces(self) -> None:
+        for hook in self.sim.hooks.after_forces:
+            hook(self.sim)
+
+    # -- the grid -------------------------------------------------------------
+
+    def grid_velocities(self, dt: float) -> None:
+        """v_I^t = (mv)_I / m_I and v~_I^{t+dt} = v_I^t + dt f_I / m_I, both constrained (lines 14-17)."""
+        sim = self.sim
+        g = sim.grid
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
+        self._constrain(g.v_old)
+        sim.boundary_work += self._constrain(g.v_new, record=True)
+        sim.domain.share_nodes(g.v_old, g.v_new)   # (owners' values to ghost nodes)
+
+    def current_velocities(self) -> None:
+        """v_I^t = (mv)_I / m_I, constrained: USF's velocity for the stress update."""
+        g = self.sim.grid
+        kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
+        self._constrain(g.v_old)
+        self.sim.domain.share_nodes(g.v_old)
+
+    def remapped_velocities(self) -> None:
+        """v_I^{t+dt} from the momentum the particles mapped back, constrained (lines 21, 24)."""
+        sim = self.sim
+        g = sim.grid
+        sim.domain.sum_ghosts(g.momentum)
+        kernels.nodal_velocity(g.mass, g.momentum, g.v_new)
+        self._constrain(g.v_new)
+        sim.domain.share_nodes(g.v_new)
+
+    def _constrain(self, v: np.ndarray, record: bool = False) -> float:
+        """Prescribed nodal velocities (the `constrain` hooks); returns their work. `record`
+        marks the update to v~^{t+dt}, whose constraint impulses are the rigid bodies' reactions."""
+        work = 0.0
+        for hook in self.sim.hooks.constrain:
+            work += hook(self.sim.grid.mass, v, record)
+        return work
+
+    # -- particles ------------------------------------------------------------
+
+    def _after_g2p(self, dt: float) -> None:
+        for hook in self.sim.hooks.after_g2p:
+            hook(self.sim, dt)
+
+    def _after_kinematics(self, dt: float, v_grid: np.ndarray) -> None:
+        for hook in self.sim.hooks.after_kinematics:
+            hook(self.sim, dt, v_grid)
+
+    def stress(self, dt: float) -> None:
+        """sigma_p from the materials (line 28)."""
+        sim = self.sim
+        for material, sl in sim.materials:
+            material.update_stress(sim.particles, sl, dt)
+        for hook in sim.hooks.after_stress:
+            hook(sim, dt)
