@@ -29,6 +29,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from solver.errors import SolverError
 from solver.results import RESULT_FILE, ResultWriter, list_frames
 
 CHECKPOINT_FILE = "checkpoint.h5"
@@ -42,7 +43,7 @@ DEFAULT_EVERY_SECONDS = 60.0
 log = logging.getLogger("mpm.solver")
 
 
-class CheckpointError(ValueError):
+class CheckpointError(SolverError, ValueError):
     """A checkpoint that cannot be used for this run."""
 
 

@@ -23,6 +23,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any, Callable
 
+from solver.errors import SolverError
 from solver.progress import ProgressBar, format_duration
 
 ENTRY_POINT_GROUP = "mpm.commands"
@@ -172,7 +173,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         result = run(scene, out_dir, progress=progress, resume=args.resume is not None,
                      checkpoint_seconds=args.checkpoint_seconds)
-    except ValueError as error:  # a checkpoint of another scene
+    except SolverError as error:  # a checkpoint of another scene
         print(f"mpm run: error: {error}", file=sys.stderr)
         return EXIT_ERROR
     if bar is not None:

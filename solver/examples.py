@@ -10,10 +10,12 @@ import os
 from pathlib import Path
 from typing import Any
 
+from solver.errors import SolverError
+
 DEFAULT_DIR = Path(__file__).resolve().parent.parent / "examples"
 
 
-class ExampleNotFound(KeyError):
+class ExampleNotFound(SolverError, KeyError):
     """No example of that name (the message lists the ones there are)."""
 
     def __str__(self) -> str:  # KeyError would print the message quoted

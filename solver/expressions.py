@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from solver.errors import SolverError
+
 MAX_LENGTH = 1000
 MAX_DEPTH = 50
 
@@ -79,7 +81,7 @@ def _reduce(ufunc: np.ufunc, args: tuple) -> np.ndarray:
     return result
 
 
-class ExpressionError(ValueError):
+class ExpressionError(SolverError, ValueError):
     """The text is not a valid expression; the message names the token and column."""
 
 

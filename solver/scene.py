@@ -37,6 +37,7 @@ from pydantic_core import PydanticCustomError
 
 from solver import capabilities
 from solver import geometry as geometry_shapes
+from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.parallel.slabs import scene_problems as slab_problems
 
@@ -57,7 +58,7 @@ CONTRACT_OUTPUT_FIELDS = frozenset({
 
 # --------------------------------------------------------------------------- errors
 
-class SceneError(ValueError):
+class SceneError(SolverError, ValueError):
     """An invalid scene. ``errors`` lists every problem as ``{"path", "message"}``."""
 
     def __init__(self, errors: list[dict[str, str]]):

@@ -15,6 +15,7 @@ import numpy as np
 
 from solver import kernels, parallel, shape, step, threads
 from solver.axisymmetric import Axisymmetry
+from solver.errors import SolverError
 from solver.loads import BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
@@ -27,7 +28,7 @@ from solver.transfer import AffineTransfer
 MASS_CUTOFF_FRACTION = 1e-9
 
 
-class Instability(RuntimeError):
+class Instability(SolverError, RuntimeError):
     """The run cannot go on: names the step, the particle (by id) and the quantity."""
 
     def __init__(self, step: int, time: float, particle_id: int | None, quantity: str, detail: str):
