@@ -39,7 +39,7 @@ class UpdatedLagrangian:
         """L_p, F_p, V_p from the grid velocity; the first inverted particle, or -1."""
         p, s = sim.particles, sim.stencil
         return kernels.update_kinematics(sim.spec, s.idx, s.dw, v_grid, dt, p.L, p.F, p.volume, p.volume0,
-                                         sim.threads, self.reference)
+                                         sim.threads, kernels.flag(self.reference))
 
     def time_step_factor(self, sim) -> float:
         return 1.0
