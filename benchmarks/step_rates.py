@@ -1,0 +1,116 @@
+"""Time per step of every example, on this tree and, side by side, on another commit.
+
+    python benchmarks/step_rates.py                      # this tree: us per step of each example
+    python benchmarks/step_rates.py --base 13114c6       # and the same on that commit, alternately
+    python benchmarks/step_rates.py --base HEAD~3 --examples two_disks taylor_bar_3d --repeats 5
+
+Each measurement is its own process (a warm numba cache; the compile is not timed):
+the example's scene at one thread (or --threads), 10 steps to warm up, then the best
+of five runs of --steps steps. With --base the commit is checked out in a temporary
+git worktree and the two trees are measured alternately, --repeats times each, so a
+load that comes and goes hits both; the table gives the median of each tree's
+repeats, the ratio base/this (above 1: this tree is faster) and the spread of the
+repeats (max/min - 1, the noise of this machine at that moment).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# Runs inside the tree being measured; works on commits before and after runner.make_simulation.
+MEASURE = r"""
+import json, sys, time
+sys.path.insert(0, ".")
+from solver.scene import load_scene
+try:
+    from solver.runner import make_simulation
+except ImportError:
+    from solver.stepper import ExplicitMPM
+    from solver.tlmpm import TotalLagrangianMPM
+    def make_simulation(s):
+        return (TotalLagrangianMPM if s.method.formulation == "tlmpm" else ExplicitMPM)(s)
+scene = json.load(open(f"examples/{sys.argv[1]}.json"))
+scene["parallel"] = {**scene.get("parallel", {}), "threads": int(sys.argv[2])}
+loaded = load_scene(scene)
+sim = make_simulation(loaded)
+def dt():
+    return loaded.time.dt or sim.stable_time_step(loaded.time.cfl)
+for _ in range(10):
+    sim.advance(dt())
+steps, best = int(sys.argv[3]), float("inf")
+for _ in range(5):
+    start = time.perf_counter()
+    for _ in range(steps):
+        sim.advance(dt())
+    best = min(best, (time.perf_counter() - start) / steps)
+print(json.dumps(best))
+"""
+
+
+def measure(tree: Path, example: str, threads: int, steps: int) -> float:
+    done = subprocess.run([sys.executable, "-c", MEASURE, example, str(threads), str(steps)], cwd=tree,
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def steps_for(example: str) -> int:
+    """Fewer steps for the large 3D examples, so each measurement takes seconds."""
+    return 10 if example in ("hypervelocity_lead", "taylor_bar_3d", "taylor_bar_3d_tlmpm") else 50
+
+
+def compare(trees: dict[str, Path], examples: list[str], threads: int, repeats: int) -> list[dict]:
+    rows = []
+    for example in examples:
+        times = {name: [] for name in trees}
+        for _ in range(repeats):
+            for name, tree in trees.items():
+                times[name].append(measure(tree, example, threads, steps_for(example)))
+        row = {"example": example, **{f"{n}_us": 1e6 * statistics.median(t) for n, t in times.items()},
+               **{f"{n}_spread": max(t) / min(t) - 1.0 for n, t in times.items()}}
+        if "base" in trees:
+            row["ratio"] = row["base_us"] / row["this_us"]
+        rows.append(row)
+        print(" ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
+    return rows
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--base", help="a commit to measure side by side with this tree")
+    parser.add_argument("--examples", nargs="+", default=sorted(p.stem for p in (ROOT / "examples").glob("*.json")))
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", type=Path, help="also write the rows as JSON")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as scratch:
+        trees = {"this": ROOT}
+        if args.base:
+            base = Path(scratch) / "base"
+            subprocess.run(["git", "worktree", "add", "--detach", str(base), args.base], cwd=ROOT, check=True,
+                           capture_output=True)
+            trees["base"] = base
+        try:
+            rows = compare(trees, args.examples, args.threads, args.repeats)
+        finally:
+            if args.base:
+                subprocess.run(["git", "worktree", "remove", "--force", str(trees["base"])], cwd=ROOT, check=False)
+    print("\n| example | this (us/step) | base (us/step) | base / this | spread this, base |")
+    print("|---|---|---|---|---|")
+    for r in rows:
+        base = f"{r['base_us']:.1f} | {r['ratio']:.3f}" if "base_us" in r else "- | -"
+        spread = f"{r['this_spread']:.0%}" + (f", {r['base_spread']:.0%}" if "base_spread" in r else "")
+        print(f"| {r['example']} | {r['this_us']:.1f} | {base} | {spread} |")
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
