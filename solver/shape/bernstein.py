@@ -17,46 +17,29 @@ configuration.
 """
 from __future__ import annotations
 
-import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from solver.shape.tensor import scatter
-from solver.threads import block_bounds, first_of
+from solver.shape import tensor
 
 SUPPORT = 3
 
 
-@njit(parallel=True, cache=True)
-def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    dims = spec[0]
-    bounds = block_bounds(x.shape[0], blocks)
-    bad = np.empty(blocks, dtype=np.int64)
-    for t in prange(blocks):
-        bad[t] = _block(dims, bounds[t], bounds[t + 1], x, lower, inv_h, cells, strides, idx, w, dw)
-    return first_of(bad)
-
-
 @njit(cache=True)
-def _block(dims, start, stop, x, lower, inv_h, cells, strides, idx, w, dw):
-    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
-    dim = len(dims)
-    base = np.empty(dim, dtype=np.int64)
-    w1 = np.empty((dim, 3))
-    g1 = np.empty((dim, 3))
-    for p in range(start, stop):
-        for a in range(dim):
-            s = (x[p, a] - lower[a]) * inv_h[a]
-            if not (s >= 0.0 and s <= 2 * (cells[a] // 2)):   # also catches NaN
-                return p
-            e = min(int(0.5 * s), cells[a] // 2 - 1)           # the element: cells 2e, 2e + 1
-            t = 0.5 * s - e
-            base[a] = 2 * e
-            w1[a, 0] = (1.0 - t) ** 2
-            w1[a, 1] = 2.0 * t * (1.0 - t)
-            w1[a, 2] = t * t
-            # dt/dx = 1 / (2 h)
-            g1[a, 0] = -(1.0 - t) * inv_h[a]
-            g1[a, 1] = (1.0 - 2.0 * t) * inv_h[a]
-            g1[a, 2] = t * inv_h[a]
-        scatter(p, 3, base, w1, g1, strides, idx, w, dw)
-    return -1
+def axis(s, a, p, cells, inv_h, data, w1, g1):
+    """The three nodes of the two-cell element holding s (in cells) along axis a."""
+    if not (s >= 0.0 and s <= 2 * (cells // 2)):   # also catches NaN
+        return -1
+    e = min(int(0.5 * s), cells // 2 - 1)           # the element: cells 2e, 2e + 1
+    t = 0.5 * s - e
+    w1[a, 0] = (1.0 - t) ** 2
+    w1[a, 1] = 2.0 * t * (1.0 - t)
+    w1[a, 2] = t * t
+    # dt/dx = 1 / (2 h)
+    g1[a, 0] = -(1.0 - t) * inv_h
+    g1[a, 1] = (1.0 - 2.0 * t) * inv_h
+    g1[a, 2] = t * inv_h
+    return 2 * e
+
+
+def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    return tensor.weights(axis, tensor.support(SUPPORT), spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -12,11 +12,9 @@ the grid needs at least 3 cells per axis (scene validation).
 """
 from __future__ import annotations
 
-import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from solver.shape.tensor import scatter
-from solver.threads import block_bounds, first_of
+from solver.shape import tensor
 
 SUPPORT = 4
 
@@ -54,37 +52,22 @@ def node_type(j, cells):
     return 3, 1.0
 
 
-@njit(parallel=True, cache=True)
-def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    dims = spec[0]
-    bounds = block_bounds(x.shape[0], blocks)
-    bad = np.empty(blocks, dtype=np.int64)
-    for t in prange(blocks):
-        bad[t] = _block(dims, bounds[t], bounds[t + 1], x, lower, inv_h, cells, strides, idx, w, dw)
-    return first_of(bad)
-
-
 @njit(cache=True)
-def _block(dims, start, stop, x, lower, inv_h, cells, strides, idx, w, dw):
-    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
-    dim = len(dims)
-    base = np.empty(dim, dtype=np.int64)
-    w1 = np.empty((dim, 4))
-    g1 = np.empty((dim, 4))
-    for p in range(start, stop):
-        for a in range(dim):
-            s = (x[p, a] - lower[a]) * inv_h[a]
-            if not (s >= 0.0 and s <= cells[a]):   # also catches NaN
-                return p
-            i = min(int(s), cells[a] - 1)
-            # nodes i-1 .. i+2, shifted inwards at the grid ends where the
-            # modified functions vanish on the node that would fall outside
-            b = min(max(i - 1, 0), cells[a] - 3)
-            base[a] = b
-            for j in range(4):
-                kind, mirror = node_type(b + j, cells[a])
-                sj, dj = spline(kind, mirror, s - (b + j))
-                w1[a, j] = sj
-                g1[a, j] = dj * inv_h[a]
-        scatter(p, 4, base, w1, g1, strides, idx, w, dw)
-    return -1
+def axis(s, a, p, cells, inv_h, data, w1, g1):
+    """The four nodes around s (in cells) along axis a (solver/shape/tensor.py)."""
+    if not (s >= 0.0 and s <= cells):   # also catches NaN
+        return -1
+    i = min(int(s), cells - 1)
+    # nodes i-1 .. i+2, shifted inwards at the grid ends where the
+    # modified functions vanish on the node that would fall outside
+    b = min(max(i - 1, 0), cells - 3)
+    for j in range(4):
+        kind, mirror = node_type(b + j, cells)
+        sj, dj = spline(kind, mirror, s - (b + j))
+        w1[a, j] = sj
+        g1[a, j] = dj * inv_h
+    return b
+
+
+def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    return tensor.weights(axis, tensor.support(SUPPORT), spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -29,8 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.shape.tensor import scatter
-from solver.threads import block_bounds, first_of
+from solver.shape import tensor
 
 SUPPORT = 3
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
@@ -81,45 +80,30 @@ def hat_and_integral(y):
     return 0.0, 1.0
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
+def axis(s, a, p, cells, inv_h, length, w1, g1):
+    """The three nodes nearest s (in cells) along axis a for the box of side length[p, a]."""
+    if not (s >= 0.0 and s <= cells):   # also catches NaN
+        return -1
+    half = 0.5 * min(max(length[p, a] * inv_h, 1e-12), 1.0)
+    lo, hi = s - half, s + half              # the box, cut at the grid ends
+    dlo, dhi = 1.0, 1.0
+    if lo < 0.0:
+        lo, dlo = 0.0, 0.0
+    if hi > cells:
+        hi, dhi = float(cells), 0.0
+    # the three nodes nearest x_p (a box of side <= h touches no other)
+    b = min(max(int(s + 0.5) - 1, 0), cells - 2)
+    for j in range(3):
+        n_hi, m_hi = hat_and_integral(hi - (b + j))
+        n_lo, m_lo = hat_and_integral(lo - (b + j))
+        phi = (m_hi - m_lo) / (hi - lo)
+        w1[a, j] = phi
+        g1[a, j] = (n_hi * dhi - n_lo * dlo - phi * (dhi - dlo)) / (hi - lo) * inv_h
+    return b
+
+
 def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """The shape-function interface with one more argument: `length` (n, dim), the
     current box sides l_p (capped at h)."""
-    dims = spec[0]
-    bounds = block_bounds(x.shape[0], blocks)
-    bad = np.empty(blocks, dtype=np.int64)
-    for t in prange(blocks):
-        bad[t] = _block(dims, bounds[t], bounds[t + 1], x, length, lower, inv_h, cells, strides, idx, w, dw)
-    return first_of(bad)
-
-
-@njit(cache=True)
-def _block(dims, start, stop, x, length, lower, inv_h, cells, strides, idx, w, dw):
-    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
-    dim = len(dims)
-    base = np.empty(dim, dtype=np.int64)
-    w1 = np.empty((dim, 3))
-    g1 = np.empty((dim, 3))
-    for p in range(start, stop):
-        for a in range(dim):
-            s = (x[p, a] - lower[a]) * inv_h[a]
-            if not (s >= 0.0 and s <= cells[a]):   # also catches NaN
-                return p
-            half = 0.5 * min(max(length[p, a] * inv_h[a], 1e-12), 1.0)
-            lo, hi = s - half, s + half              # the box, cut at the grid ends
-            dlo, dhi = 1.0, 1.0
-            if lo < 0.0:
-                lo, dlo = 0.0, 0.0
-            if hi > cells[a]:
-                hi, dhi = float(cells[a]), 0.0
-            # the three nodes nearest x_p (a box of side <= h touches no other)
-            b = min(max(int(s + 0.5) - 1, 0), cells[a] - 2)
-            base[a] = b
-            for j in range(3):
-                n_hi, m_hi = hat_and_integral(hi - (b + j))
-                n_lo, m_lo = hat_and_integral(lo - (b + j))
-                phi = (m_hi - m_lo) / (hi - lo)
-                w1[a, j] = phi
-                g1[a, j] = (n_hi * dhi - n_lo * dlo - phi * (dhi - dlo)) / (hi - lo) * inv_h[a]
-        scatter(p, 3, base, w1, g1, strides, idx, w, dw)
-    return -1
+    return tensor.weights(axis, tensor.support(SUPPORT), spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks)

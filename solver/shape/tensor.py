@@ -1,20 +1,73 @@
-"""The tensor product shared by the higher-order shape functions.
+"""The tensor product shared by every shape function.
 
-Each of them computes, per axis a, the first node `base[a]` of the particle's
-stencil and the 1D weights w1[a, j] and derivatives g1[a, j] (already divided by
-h) of the `support` nodes base[a] + j. The stencil node k has the per-axis
-offsets j_a = (k // support**a) % support (axis 0 fastest, like the node order).
+A shape function module gives its 1D function as a numba function
+
+    axis(s, a, p, cells, inv_h, data, w1, g1) -> first node, or -1 outside the grid
+
+of the position s along axis a in cells from the grid's lower end (cells: the
+axis's cell count, inv_h: 1/h, data: the function's per-particle data, e.g.
+GIMP's box sides, or NO_DATA). It fills w1[a, j] and g1[a, j] (the derivative,
+already divided by h) for the `support` nodes first + j, and must test s itself
+(catching NaN). `weights` below does the rest for every module: the particle
+loop on the threads' blocks and the tensor products. The stencil node k has the
+per-axis offsets j_a = (k // support**a) % support (axis 0 fastest, like the
+node order).
 """
 from __future__ import annotations
 
-from numba import njit
+import numpy as np
+from numba import njit, prange
+
+from solver.threads import block_bounds, first_of
+
+NO_DATA = np.zeros((0, 0))   # `data` of the functions that need none
+_SUPPORTS = {n: np.empty((0,) * n) for n in range(1, 6)}
+
+
+def support(nodes: int) -> np.ndarray:
+    """The nodes per axis as a compile-time constant of `weights`: an empty array of that many
+    dimensions (read as `.ndim`), so the small loops over them unroll as they did when each
+    module had its own kernel (a runtime count made the weights 2-5x slower)."""
+    return _SUPPORTS[nodes]
+
+
+@njit(parallel=True, cache=True)
+def weights(axis, nodes, spec, x, data, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    """idx, w, dw of every particle (solver/shape/__init__.py); the first particle outside
+    the grid, or -1. numba compiles one specialisation per `axis` function."""
+    dims = spec[0]
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _block(axis, nodes, dims, bounds[t], bounds[t + 1], x, data, lower, inv_h, cells, strides,
+                        idx, w, dw)
+    return first_of(bad)
 
 
 @njit(cache=True)
-def scatter(p, support, base, w1, g1, strides, idx, w, dw):
-    """Fill idx[p], w[p], dw[p] with the tensor products of the 1D weights."""
-    dim = base.shape[0]
-    nk = idx.shape[1]
+def _block(axis, nodes, dims, start, stop, x, data, lower, inv_h, cells, strides, idx, w, dw):
+    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
+    dim, support = len(dims), nodes.ndim
+    base = np.empty(dim, dtype=np.int64)
+    w1 = np.empty((dim, support))
+    g1 = np.empty((dim, support))
+    for p in range(start, stop):
+        for a in range(dim):
+            first = axis((x[p, a] - lower[a]) * inv_h[a], a, p, cells[a], inv_h[a], data, w1, g1)
+            if first < 0:
+                return p
+            base[a] = first
+        scatter(p, nodes, dims, base, w1, g1, strides, idx, w, dw)
+    return -1
+
+
+@njit(cache=True)
+def scatter(p, nodes, dims, base, w1, g1, strides, idx, w, dw):
+    """Fill idx[p], w[p], dw[p] with the tensor products of the 1D weights (the support
+    nodes.ndim and the dimension len(dims) compile-time constants: the divisions below
+    become multiplications)."""
+    dim, support = len(dims), nodes.ndim
+    nk = support**dim
     for k in range(nk):
         node = 0
         wk = 1.0
