@@ -10,12 +10,12 @@ from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
+from core.settings import Settings, get_settings
 from service import errors, health, jobs, scenes
 from service.auth import TokenAuth, load_tokens
 from service.body_limit import BodySizeLimit
 from service.json_depth import JsonDepthLimit
 from service.state import Services
-from worker.settings import Settings, get_settings
 
 log = logging.getLogger("mpm.api")
 

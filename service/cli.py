@@ -12,12 +12,12 @@ import sys
 
 import uvicorn
 
+from core.logs import configure_logging
+from core.settings import get_settings
 from service.app import create_app
 from service.auth import TokenError, access_notice, load_tokens
 from service.embedded_redis import EmbeddedRedis
 from service.supervisor import ChildProcess, Supervisor
-from worker.logs import configure_logging
-from worker.settings import get_settings
 
 log = logging.getLogger("mpm.serve")
 

@@ -10,14 +10,14 @@ from fastapi import APIRouter, Depends, Query, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
+from core.celery_app import enqueue
+from core.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
+from core.store import FINISHED, STATUSES, CursorError, JobStore, job_key, now_iso
 from service import quotas, results
 from service.auth import caller, owns
 from service.errors import ApiError, documented, validation_error
 from service.scenes import check_scene, granted_processes
 from service.state import Services, services
-from worker.celery_app import enqueue
-from worker.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
-from worker.store import FINISHED, STATUSES, CursorError, JobStore, job_key, now_iso
 
 log = logging.getLogger("mpm.api")
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"],

@@ -10,9 +10,9 @@ from __future__ import annotations
 from datetime import datetime, timedelta, timezone
 from typing import Any
 
+from core.settings import Settings
+from core.store import JobStore, OwnerQuota
 from service.errors import ApiError, validation_error
-from worker.settings import Settings
-from worker.store import JobStore, OwnerQuota
 
 RETRY_AFTER_JOBS = 10  # seconds: a guess at when a job of the caller's will have finished
 

@@ -12,8 +12,8 @@ from pathlib import Path
 from solver.preview import render_preview
 from solver.results import read_series
 
+from core.paths import JobFiles
 from service.errors import ApiError, validation_error
-from worker.paths import JobFiles
 
 # Rendering is CPU-bound and memory-hungry: one at a time per API process.
 _render_lock = threading.Lock()

@@ -12,10 +12,10 @@ from solver.examples import ExampleNotFound, list_examples, load_example
 from solver.scene import Limits, Scene, SceneError, load_scene
 from solver.summary import summarize
 
+from core.settings import Settings
 from service.auth import caller
 from service.errors import ApiError, documented, validation_error
 from service.state import Services, services
-from worker.settings import Settings
 
 router = APIRouter(tags=["scenes"], dependencies=[Depends(caller)])
 

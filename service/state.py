@@ -8,9 +8,9 @@ import redis.asyncio
 from celery import Celery
 from fastapi import Request
 
-from worker.celery_app import make_celery
-from worker.settings import Settings
-from worker.store import JobStore
+from core.celery_app import make_celery
+from core.settings import Settings
+from core.store import JobStore
 
 
 @dataclass

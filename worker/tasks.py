@@ -27,13 +27,13 @@ from celery import shared_task
 from celery.exceptions import Reject
 from celery.signals import worker_shutting_down
 
+from core.celery_app import TASK_NAME
+from core.paths import JobFiles, parse_job_id
+from core.settings import Settings, get_settings
+from core.store import FINISHED, JobStore, now_iso
 from solver.checkpoint import checkpoint_path
-from worker.celery_app import TASK_NAME
 from worker.disk import DiskQuota
-from worker.paths import JobFiles, parse_job_id
 from worker.runner import Outcome, run_solver, solver_command
-from worker.settings import Settings, get_settings
-from worker.store import FINISHED, JobStore, now_iso
 
 log = logging.getLogger("mpm.worker")
 

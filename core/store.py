@@ -22,6 +22,10 @@ ACTIVE = ("queued", "running")
 FINISHED = ("succeeded", "failed", "cancelled")
 ALL_INDEX = PREFIX + "jobs"
 WORKERS = PREFIX + "workers"
+# A worker beats every HEARTBEAT_INTERVAL seconds (worker/heartbeat.py); one not heard
+# from for HEARTBEAT_MAX_AGE is taken as gone (`/readyz` counts the others).
+HEARTBEAT_INTERVAL = 2.0
+HEARTBEAT_MAX_AGE = 10.0
 
 
 def job_key(job_id: str) -> str:
@@ -349,5 +353,5 @@ class JobStore:
     def worker_gone(self, worker: str) -> None:
         self.redis.zrem(WORKERS, worker)
 
-    def live_workers(self, max_age: float) -> list[str]:
+    def live_workers(self, max_age: float = HEARTBEAT_MAX_AGE) -> list[str]:
         return self.redis.zrangebyscore(WORKERS, time.time() - max_age, "+inf")

@@ -1,7 +1,7 @@
 """Settings of the service and its workers, read from the environment (`MPM_*`).
 
-Both the API and the workers read the same settings, so they live here, in the
-lower of the two packages (the service imports the worker, never the reverse).
+Both the API and the workers read these settings, so they live in the core that
+both import.
 """
 from __future__ import annotations
 
