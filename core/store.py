@@ -3,7 +3,8 @@ and one per status), a lease per running job, and the workers' heartbeats.
 
 Every change of status is one Lua script, so that it is atomic: a job is never
 both cancelled and running, never counted twice, never half-created. Field values
-are stored JSON-encoded, so a record reads back with its types.
+are stored JSON-encoded, so a record reads back with its types; their names are
+those of core.models.JobRecord.
 """
 from __future__ import annotations
 
@@ -16,10 +17,9 @@ from typing import Any, Iterable
 
 import redis
 
+from core.models import ACTIVE, FINISHED, RECORD_FIELDS, now_iso
+
 PREFIX = "mpm:"
-STATUSES = ("queued", "running", "succeeded", "failed", "cancelled")
-ACTIVE = ("queued", "running")
-FINISHED = ("succeeded", "failed", "cancelled")
 ALL_INDEX = PREFIX + "jobs"
 WORKERS = PREFIX + "workers"
 # A worker beats every HEARTBEAT_INTERVAL seconds (worker/heartbeat.py); one not heard
@@ -53,10 +53,6 @@ def lease_key(job_id: str) -> str:
 def today() -> str:
     """The UTC date, the day of the daily quotas."""
     return datetime.now(timezone.utc).date().isoformat()
-
-
-def now_iso() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
 
 
 # KEYS: job, all index, queued index, running index, owner index, owner's usage today.
@@ -214,6 +210,9 @@ class JobStore:
 
     @staticmethod
     def _pairs(fields: dict[str, Any]) -> list[str]:
+        unknown = fields.keys() - RECORD_FIELDS
+        if unknown:
+            raise ValueError(f"not fields of a job record (core.models.JobRecord): {sorted(unknown)}")
         out: list[str] = []
         for name, value in fields.items():
             out += [name, json.dumps(value)]

@@ -12,7 +12,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from core.paths import JobFiles
-from core.store import FINISHED, JobStore, job_key, status_index
+from core.models import FINISHED
+from core.store import JobStore, job_key, status_index
 
 log = logging.getLogger("mpm.worker")
 

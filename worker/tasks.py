@@ -30,7 +30,8 @@ from celery.signals import worker_shutting_down
 from core.celery_app import TASK_NAME
 from core.paths import JobFiles, parse_job_id
 from core.settings import Settings, get_settings
-from core.store import FINISHED, JobStore, now_iso
+from core.models import ACTIVE, FINISHED, now_iso
+from core.store import JobStore
 from solver.checkpoint import checkpoint_path
 from worker.disk import DiskQuota
 from worker.runner import Outcome, run_solver, solver_command
@@ -87,10 +88,10 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         _give_up(store, job_id, files, lost, "its worker was lost")
         return
     before = store.transition(
-        job_id, ["queued", "running"], "running", started_at=now_iso(), worker=worker,
+        job_id, ACTIVE, "running", started_at=now_iso(), worker=worker,
         attempts=job.get("attempts", 0) + 1, lost=lost, steps_per_second=None, eta_seconds=None,
         error=None)
-    if before not in ("queued", "running"):
+    if before not in ACTIVE:
         log.info("job skipped: it is %s", before, extra={"job_id": job_id})
         return
     if before == "running":
@@ -167,7 +168,7 @@ def _killed(outcome: Outcome) -> bool:
 def _give_up(store: JobStore, job_id: str, files: JobFiles, lost: int, why: str) -> None:
     error = (f"the run was lost {lost} times (last: {why}); given up after MPM_MAX_ATTEMPTS = "
              f"{get_settings().max_attempts}")
-    _retry_redis(lambda: store.transition(job_id, ["queued", "running"], "failed", error=error, lost=lost,
+    _retry_redis(lambda: store.transition(job_id, ACTIVE, "failed", error=error, lost=lost,
                                           eta_seconds=None, finished_at=now_iso()))
     checkpoint_path(files.dir).unlink(missing_ok=True)
     log.error("job failed: %s", error, extra={"job_id": job_id})
