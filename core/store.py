@@ -178,7 +178,13 @@ class Page:
 
 
 class CursorError(ValueError):
-    """A paging cursor that this store did not hand out."""
+    """A paging cursor that this store did not hand out; `reason` says so (for an answer
+    that names the cursor its own way)."""
+
+    reason = "not a cursor from this service"
+
+    def __init__(self) -> None:
+        super().__init__(f"cursor: {self.reason}")
 
 
 def _encode_cursor(score: int, job_id: str) -> str:
@@ -191,7 +197,7 @@ def _decode_cursor(cursor: str) -> tuple[int, str]:
         score, job_id = text.split(":", 1)
         return int(score), job_id
     except (ValueError, UnicodeDecodeError):
-        raise CursorError("cursor: not a cursor from this service") from None
+        raise CursorError() from None
 
 
 class JobStore:

@@ -110,7 +110,7 @@ def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500)
     try:
         page = svc.store.list(status, limit, cursor, owner=owner)
     except CursorError as exc:
-        raise validation_error([{"path": "cursor", "message": str(exc).split(": ", 1)[1]}]) from None
+        raise validation_error([{"path": "cursor", "message": exc.reason}]) from None
     return {"jobs": [public(job) for job in page.jobs], "next_cursor": page.next_cursor}
 
 
