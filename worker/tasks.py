@@ -97,10 +97,8 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     if before == "running":
         log.warning("job restarted: its worker was lost", extra={"job_id": job_id})
     resuming = checkpoint_path(files.dir).exists()
-    if not resuming:  # a run again without a checkpoint starts from a clean folder
-        for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
-            stale.unlink(missing_ok=True)
-        shutil.rmtree(files.previews, ignore_errors=True)
+    if not resuming:
+        _clear_outputs(files)
     if store.cancel_requested(job_id):
         store.transition(job_id, ["running"], "cancelled", finished_at=now_iso())
         return
@@ -158,6 +156,13 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
                     extra={"job_id": job_id, "lost": lost})
         _retry_redis(lambda: store.update_running(job_id, lost=lost))
     _finish(store, job_id, files, outcome, settings, quota)
+
+
+def _clear_outputs(files: JobFiles) -> None:
+    """A run again without a checkpoint starts from a clean folder."""
+    for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
+        stale.unlink(missing_ok=True)
+    shutil.rmtree(files.previews, ignore_errors=True)
 
 
 def _killed(outcome: Outcome) -> bool:
