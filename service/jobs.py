@@ -25,6 +25,7 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"],
                    responses=documented({401: "no valid API token (when the service has tokens)",
                                          404: "no such job (or not the caller's)", 422: "invalid parameters"}))
 
+
 class JobRequest(BaseModel):
     model_config = ConfigDict(extra="forbid")
     scene: dict[str, Any] = Field(description="the scene document (see GET /v1/schema/scene)")
