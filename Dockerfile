@@ -8,6 +8,7 @@ WORKDIR /app
 
 COPY pyproject.toml README.md ./
 COPY solver solver
+COPY core core
 COPY worker worker
 COPY service service
 COPY examples examples

@@ -34,9 +34,8 @@ import httpx
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from core.models import FINISHED  # noqa: E402
 from service.embedded_redis import EmbeddedRedis  # noqa: E402
-
-FINISHED = ("succeeded", "failed", "cancelled")
 
 
 def scene(name: str, end: float, walls: bool = True) -> dict:

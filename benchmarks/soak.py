@@ -40,10 +40,8 @@ def _service_benchmark():
 
 
 _bench = _service_benchmark()
-percentile, scene, seconds_between, status_load = (_bench.percentile, _bench.scene, _bench.seconds_between,
-                                                   _bench.status_load)
-
-FINISHED = ("succeeded", "failed", "cancelled")
+FINISHED, percentile, scene, seconds_between, status_load = (
+    _bench.FINISHED, _bench.percentile, _bench.scene, _bench.seconds_between, _bench.status_load)
 
 
 def rss_mib(pid: int) -> float | None:

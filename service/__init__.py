@@ -1,2 +1,3 @@
 """The HTTP service: FastAPI app (`service.app`), job routes, scene validation,
-the embedded Redis and `mpm serve`. Settings and job records are in `worker`."""
+the embedded Redis and `mpm serve`. Job records, the job store and the settings it
+shares with the workers are in `core`."""

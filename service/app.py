@@ -14,8 +14,8 @@ from service import errors, health, jobs, scenes
 from service.auth import TokenAuth, load_tokens
 from service.body_limit import BodySizeLimit
 from service.json_depth import JsonDepthLimit
+from service.settings import ApiSettings, get_api_settings
 from service.state import Services
-from worker.settings import Settings, get_settings
 
 log = logging.getLogger("mpm.api")
 
@@ -25,9 +25,9 @@ PLACEHOLDER = """<!doctype html><html><head><meta charset="utf-8"><title>MPM ser
 The API is at <a href="/docs">/docs</a>.</p></body></html>"""
 
 
-def create_app(settings: Settings | None = None) -> FastAPI:
+def create_app(settings: ApiSettings | None = None) -> FastAPI:
     """The app; raises service.auth.TokenError when MPM_API_TOKENS cannot be read."""
-    settings = settings or get_settings()
+    settings = settings or get_api_settings()
     tokens = load_tokens(settings.api_tokens)
 
     @asynccontextmanager

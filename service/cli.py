@@ -12,12 +12,12 @@ import sys
 
 import uvicorn
 
+from core.logs import configure_logging
 from service.app import create_app
 from service.auth import TokenError, access_notice, load_tokens
 from service.embedded_redis import EmbeddedRedis
+from service.settings import get_api_settings
 from service.supervisor import ChildProcess, Supervisor
-from worker.logs import configure_logging
-from worker.settings import get_settings
 
 log = logging.getLogger("mpm.serve")
 
@@ -48,7 +48,7 @@ def serve_command(args: argparse.Namespace) -> int:
     # while it serves, then raises the signal again: it lands here, not in the default
     # handler that would end the process before the worker and Redis are stopped.
     signal.signal(signal.SIGTERM, _interrupt)
-    settings = get_settings()
+    settings = get_api_settings()
     updates = {k: v for k, v in (("host", args.host), ("port", args.port)) if v is not None}
     settings = settings.model_copy(update=updates)
     configure_logging(settings.log_level)

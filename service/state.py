@@ -8,21 +8,21 @@ import redis.asyncio
 from celery import Celery
 from fastapi import Request
 
-from worker.celery_app import make_celery
-from worker.settings import Settings
-from worker.store import JobStore
+from core.celery_app import make_celery
+from core.store import JobStore
+from service.settings import ApiSettings
 
 
 @dataclass
 class Services:
-    settings: Settings
+    settings: ApiSettings
     store: JobStore
     celery: Celery
     # For the hottest route (a job's status, polled by every client): no thread hop.
     async_redis: redis.asyncio.Redis
 
     @classmethod
-    def connect(cls, settings: Settings) -> "Services":
+    def connect(cls, settings: ApiSettings) -> "Services":
         options = dict(decode_responses=True, socket_timeout=5, health_check_interval=30)
         client = redis.Redis.from_url(settings.redis_url, **options)
         return cls(settings, JobStore(client), make_celery(settings),

@@ -12,7 +12,7 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
-from worker.runner import die_with_parent
+from core.processes import die_with_parent
 
 log = logging.getLogger("mpm.serve")
 

@@ -56,15 +56,21 @@ def available_fields(datasets: Iterable[str]) -> list[str]:
     return sorted(datasets | derived)
 
 
+class UnknownField(ValueError):
+    """A field a frame does not have and cannot derive; ``available``: those it can draw."""
+
+    def __init__(self, field: str, available: list[str]):
+        self.field, self.available = field, available
+        super().__init__(f"field {field!r} is not in this frame; available: {', '.join(available)}")
+
+
 def scalar_values(fields: dict[str, np.ndarray], name: str) -> tuple[np.ndarray, str]:
     """One value per particle for ``name`` and the label saying how it was reduced."""
     if name not in fields and name in DERIVED and DERIVED[name][0] in fields:
         source, function = DERIVED[name]
         return function(np.asarray(fields[source], dtype=float)), name
     if name not in fields:
-        raise ValueError(
-            f"field {name!r} is not in this frame; available: {', '.join(available_fields(fields))}"
-        )
+        raise UnknownField(name, available_fields(fields))
     data = np.asarray(fields[name], dtype=float).reshape(len(fields[name]), -1)
     if data.shape[1] == 1:
         return data[:, 0], name
@@ -91,8 +97,9 @@ def render_preview(
 ) -> bytes:
     """Render a frame (``-1``: the last) of a result file as PNG bytes, also written to ``out``.
 
-    Raises ``ValueError`` naming the field and the available ones for an
-    unknown ``field``, and ``IndexError`` for a frame out of range.
+    Raises :class:`UnknownField` (a ``ValueError``) naming the field and the available
+    ones for an unknown ``field``, and :class:`solver.results.FrameNotFound` (an
+    ``IndexError``) for a frame out of range.
     """
     scene = read_scene(result_path)
     snapshot = read_frame(result_path, frame)

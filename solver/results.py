@@ -340,16 +340,28 @@ def list_frames(path: str | os.PathLike) -> list[dict[str, Any]]:
         ]
 
 
+class FrameNotFound(IndexError):
+    """A frame the result file does not have (``count``: the frames it has, maybe 0)."""
+
+    def __init__(self, path: str | os.PathLike, frame: int, count: int):
+        self.path, self.frame, self.count = path, frame, count
+        super().__init__(self.describe(path))
+
+    def describe(self, file: object) -> str:
+        """The message, naming the file as ``file`` (a server shows no path of its own)."""
+        if not self.count:
+            return f"{file} has no frames yet"
+        return f"frame {self.frame} is out of range: {file} has {self.count} frames (0..{self.count - 1})"
+
+
 def read_frame(path: str | os.PathLike, frame: int = -1) -> dict[str, Any]:
-    """One frame (``-1``: the last): ``{"index", "name", "time", "step", "fields": {name: array}}``."""
+    """One frame (``-1``: the last): ``{"index", "name", "time", "step", "fields": {name: array}}``.
+
+    Raises :class:`FrameNotFound` (an ``IndexError``) for a frame out of range."""
     with open_result(path) as h5:
         names = _complete_frames(h5)
-        if not names:
-            raise IndexError(f"{path} has no frames yet")
         if not -len(names) <= frame < len(names):
-            raise IndexError(
-                f"frame {frame} is out of range: {path} has {len(names)} frames (0..{len(names) - 1})"
-            )
+            raise FrameNotFound(path, frame, len(names))
         index = frame % len(names)
         group = h5["frames"][names[index]]
         return {

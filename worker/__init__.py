@@ -1,2 +1,3 @@
-"""The workers: the Celery app and its one task, the solver runner, and what the API
-shares with them (settings from `MPM_*`, job records in Redis, JSON logs)."""
+"""The workers (`mpm worker`): the one Celery task that runs a job, the solver runner,
+the heartbeat and recovery of lost jobs, the disk limits and retention, the warm-up.
+What they share with the API (job records, settings, the Celery app, logs) is in `core`."""

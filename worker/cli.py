@@ -9,11 +9,11 @@ import sys
 
 from celery.signals import worker_ready, worker_shutdown
 
-from worker.celery_app import QUEUE, enqueue, make_celery
+from core.celery_app import QUEUE, enqueue, make_celery
+from core.logs import configure_logging
+from core.settings import get_settings
 from worker.disk import remove_expired
 from worker.heartbeat import Heartbeat
-from worker.logs import configure_logging
-from worker.settings import get_settings
 from worker.warmup import warm_up
 
 log = logging.getLogger("mpm.worker")
@@ -47,7 +47,7 @@ def worker_command(args: argparse.Namespace) -> int:
     name = args.name or f"mpm-{os.getpid()}@{socket.gethostname()}"
     if settings.warmup and not args.no_warmup:
         warm_up()
-    app = make_celery(settings)
+    app = make_celery(settings, include=("worker.tasks",))
 
     from worker.tasks import get_store  # the task module registers the task with `app`
     heartbeat = Heartbeat(get_store(), name, lambda job_id: enqueue(app, job_id),

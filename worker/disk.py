@@ -11,8 +11,9 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
-from worker.paths import JobFiles
-from worker.store import FINISHED, JobStore, job_key, status_index
+from core.paths import JobFiles
+from core.models import FINISHED
+from core.store import JobStore, job_key, status_index
 
 log = logging.getLogger("mpm.worker")
 

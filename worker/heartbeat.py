@@ -11,13 +11,9 @@ from typing import Callable
 
 import redis
 
-from worker.store import JobStore
+from core.store import HEARTBEAT_INTERVAL, JobStore
 
 log = logging.getLogger("mpm.worker")
-
-INTERVAL = 2.0
-# A worker not heard from for this long is taken as gone.
-MAX_AGE = 10.0
 
 
 class Heartbeat:
@@ -35,7 +31,7 @@ class Heartbeat:
 
     def stop(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=INTERVAL + 1)
+        self._thread.join(timeout=HEARTBEAT_INTERVAL + 1)
         try:
             self.store.worker_gone(self.worker)
         except redis.RedisError:
@@ -57,4 +53,4 @@ class Heartbeat:
                     self.retain()
             except redis.RedisError as exc:
                 log.warning("heartbeat failed: %s", exc, extra={"worker": self.worker})
-            self._stop.wait(INTERVAL)
+            self._stop.wait(HEARTBEAT_INTERVAL)

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
+from core.processes import die_with_parent
+
 # One JSON object per progress line; lines that are not JSON go to the log.
 ProgressLine = dict[str, Any]
 
@@ -44,14 +46,6 @@ def solver_command(scene: Path, out_dir: Path, processes: int = 1, progress: str
     if checkpoint_seconds is not None:
         command += ["--resume", str(out_dir), "--checkpoint-seconds", repr(checkpoint_seconds)]
     return command
-
-
-def die_with_parent() -> None:
-    """For `preexec_fn` (Linux): the child gets SIGTERM when the thread that started it
-    dies, so that a killed worker (or `mpm serve`) leaves no solver (or Redis) behind."""
-    if sys.platform.startswith("linux"):
-        import ctypes
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
 def _kill_group(process: subprocess.Popen, sig: int) -> None:

@@ -27,13 +27,14 @@ from celery import shared_task
 from celery.exceptions import Reject
 from celery.signals import worker_shutting_down
 
+from core.celery_app import TASK_NAME
+from core.paths import JobFiles, parse_job_id
+from core.settings import Settings, get_settings
+from core.models import ACTIVE, FINISHED, now_iso
+from core.store import JobStore
 from solver.checkpoint import checkpoint_path
-from worker.celery_app import TASK_NAME
 from worker.disk import DiskQuota
-from worker.paths import JobFiles, parse_job_id
 from worker.runner import Outcome, run_solver, solver_command
-from worker.settings import Settings, get_settings
-from worker.store import FINISHED, JobStore, now_iso
 
 log = logging.getLogger("mpm.worker")
 
@@ -87,19 +88,17 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         _give_up(store, job_id, files, lost, "its worker was lost")
         return
     before = store.transition(
-        job_id, ["queued", "running"], "running", started_at=now_iso(), worker=worker,
+        job_id, ACTIVE, "running", started_at=now_iso(), worker=worker,
         attempts=job.get("attempts", 0) + 1, lost=lost, steps_per_second=None, eta_seconds=None,
         error=None)
-    if before not in ("queued", "running"):
+    if before not in ACTIVE:
         log.info("job skipped: it is %s", before, extra={"job_id": job_id})
         return
     if before == "running":
         log.warning("job restarted: its worker was lost", extra={"job_id": job_id})
     resuming = checkpoint_path(files.dir).exists()
-    if not resuming:  # a run again without a checkpoint starts from a clean folder
-        for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
-            stale.unlink(missing_ok=True)
-        shutil.rmtree(files.previews, ignore_errors=True)
+    if not resuming:
+        _clear_outputs(files)
     if store.cancel_requested(job_id):
         store.transition(job_id, ["running"], "cancelled", finished_at=now_iso())
         return
@@ -159,6 +158,13 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     _finish(store, job_id, files, outcome, settings, quota)
 
 
+def _clear_outputs(files: JobFiles) -> None:
+    """A run again without a checkpoint starts from a clean folder."""
+    for stale in (files.result, files.xdmf, files.log, files.dir / "preview.png"):
+        stale.unlink(missing_ok=True)
+    shutil.rmtree(files.previews, ignore_errors=True)
+
+
 def _killed(outcome: Outcome) -> bool:
     """The solver process died by a signal we did not send (kill -9, out of memory)."""
     return outcome.stopped is None and outcome.returncode < 0
@@ -167,7 +173,7 @@ def _killed(outcome: Outcome) -> bool:
 def _give_up(store: JobStore, job_id: str, files: JobFiles, lost: int, why: str) -> None:
     error = (f"the run was lost {lost} times (last: {why}); given up after MPM_MAX_ATTEMPTS = "
              f"{get_settings().max_attempts}")
-    _retry_redis(lambda: store.transition(job_id, ["queued", "running"], "failed", error=error, lost=lost,
+    _retry_redis(lambda: store.transition(job_id, ACTIVE, "failed", error=error, lost=lost,
                                           eta_seconds=None, finished_at=now_iso()))
     checkpoint_path(files.dir).unlink(missing_ok=True)
     log.error("job failed: %s", error, extra={"job_id": job_id})

@@ -7,9 +7,9 @@ import httpx
 import pytest
 import redis
 
+from core.store import JobStore
 from service.embedded_redis import EmbeddedRedis
 from service_support import Stack
-from worker.store import JobStore
 
 STORE_TEST_DB = 15  # the store tests' own database, apart from the service's (0)
 

@@ -18,10 +18,10 @@ from typing import Any, Callable
 import httpx
 import redis
 
+from core.models import FINISHED
+from core.store import JobStore
 from service.embedded_redis import EmbeddedRedis
-from worker.store import JobStore
 
-FINISHED = ("succeeded", "failed", "cancelled")
 # The `mpm` command (`python -m solver` is the same dispatcher), as users run it.
 MPM = [sys.executable, "-m", "solver"]
 

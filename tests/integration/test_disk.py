@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from datetime import datetime, timedelta, timezone
 
+from core.paths import JobFiles, new_job_id
 from worker.disk import DiskQuota, folder_bytes, remove_expired
-from worker.paths import JobFiles, new_job_id
 
 
 def iso(days_ago: float) -> str:

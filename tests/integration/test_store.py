@@ -5,8 +5,8 @@ import time
 
 import pytest
 
-from worker.paths import new_job_id
-from worker.store import CursorError
+from core.paths import new_job_id
+from core.store import CursorError
 
 
 def _create(store, n=1, max_active=100, **fields):

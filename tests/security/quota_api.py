@@ -11,8 +11,8 @@ import redis
 from secure_service import TOKENS, bearer
 from service_support import MPM, Process, answers, free_port, wait_until
 
+from core.store import JobStore
 from service.embedded_redis import EmbeddedRedis
-from worker.store import JobStore
 
 
 class QuotaApi:

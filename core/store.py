@@ -3,7 +3,8 @@ and one per status), a lease per running job, and the workers' heartbeats.
 
 Every change of status is one Lua script, so that it is atomic: a job is never
 both cancelled and running, never counted twice, never half-created. Field values
-are stored JSON-encoded, so a record reads back with its types.
+are stored JSON-encoded, so a record reads back with its types; their names are
+those of core.models.JobRecord.
 """
 from __future__ import annotations
 
@@ -16,12 +17,15 @@ from typing import Any, Iterable
 
 import redis
 
+from core.models import ACTIVE, FINISHED, RECORD_FIELDS, now_iso
+
 PREFIX = "mpm:"
-STATUSES = ("queued", "running", "succeeded", "failed", "cancelled")
-ACTIVE = ("queued", "running")
-FINISHED = ("succeeded", "failed", "cancelled")
 ALL_INDEX = PREFIX + "jobs"
 WORKERS = PREFIX + "workers"
+# A worker beats every HEARTBEAT_INTERVAL seconds (worker/heartbeat.py); one not heard
+# from for HEARTBEAT_MAX_AGE is taken as gone (`/readyz` counts the others).
+HEARTBEAT_INTERVAL = 2.0
+HEARTBEAT_MAX_AGE = 10.0
 
 
 def job_key(job_id: str) -> str:
@@ -49,10 +53,6 @@ def lease_key(job_id: str) -> str:
 def today() -> str:
     """The UTC date, the day of the daily quotas."""
     return datetime.now(timezone.utc).date().isoformat()
-
-
-def now_iso() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
 
 
 # KEYS: job, all index, queued index, running index, owner index, owner's usage today.
@@ -178,7 +178,13 @@ class Page:
 
 
 class CursorError(ValueError):
-    """A paging cursor that this store did not hand out."""
+    """A paging cursor that this store did not hand out; `reason` says so (for an answer
+    that names the cursor its own way)."""
+
+    reason = "not a cursor from this service"
+
+    def __init__(self) -> None:
+        super().__init__(f"cursor: {self.reason}")
 
 
 def _encode_cursor(score: int, job_id: str) -> str:
@@ -191,7 +197,7 @@ def _decode_cursor(cursor: str) -> tuple[int, str]:
         score, job_id = text.split(":", 1)
         return int(score), job_id
     except (ValueError, UnicodeDecodeError):
-        raise CursorError("cursor: not a cursor from this service") from None
+        raise CursorError() from None
 
 
 class JobStore:
@@ -210,6 +216,9 @@ class JobStore:
 
     @staticmethod
     def _pairs(fields: dict[str, Any]) -> list[str]:
+        unknown = fields.keys() - RECORD_FIELDS
+        if unknown:
+            raise ValueError(f"not fields of a job record (core.models.JobRecord): {sorted(unknown)}")
         out: list[str] = []
         for name, value in fields.items():
             out += [name, json.dumps(value)]
@@ -349,5 +358,5 @@ class JobStore:
     def worker_gone(self, worker: str) -> None:
         self.redis.zrem(WORKERS, worker)
 
-    def live_workers(self, max_age: float) -> list[str]:
+    def live_workers(self, max_age: float = HEARTBEAT_MAX_AGE) -> list[str]:
         return self.redis.zrangebyscore(WORKERS, time.time() - max_age, "+inf")

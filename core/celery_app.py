@@ -1,21 +1,23 @@
-"""The Celery application: Redis as the broker, one queue, one task (`worker.tasks.run_job`).
+"""The Celery application: Redis as the broker, one queue, one task (`TASK_NAME`, defined
+by the workers in `worker.tasks`; the API only puts jobs on the queue).
 
-Job state lives in the job records (worker.store), not in a Celery result backend.
+Job state lives in the job records (core.store), not in a Celery result backend.
 """
 from __future__ import annotations
 
 from celery import Celery
 
-from worker.settings import Settings
+from core.settings import Settings
 
 QUEUE = "mpm-jobs"
 TASK_NAME = "mpm.run_job"
 
 
-def make_celery(settings: Settings) -> Celery:
+def make_celery(settings: Settings, include: tuple[str, ...] = ()) -> Celery:
+    """The app; `include`: the modules that define its tasks (a worker's)."""
     if not settings.redis_url:
         raise RuntimeError("MPM_REDIS_URL is not set (`mpm serve` sets it for its embedded Redis)")
-    app = Celery("mpm", broker=settings.redis_url, include=["worker.tasks"])
+    app = Celery("mpm", broker=settings.redis_url, include=list(include))
     app.conf.update(
         task_default_queue=QUEUE,
         task_ignore_result=True,
@@ -29,7 +31,7 @@ def make_celery(settings: Settings) -> Celery:
         # Longer than the longest job: only a lost worker's job is redelivered.
         broker_transport_options={"visibility_timeout": settings.visibility_timeout},
         broker_connection_retry_on_startup=True,
-        # Logs go through worker.logs (JSON lines), stdout stays as it is.
+        # Logs go through core.logs (JSON lines), stdout stays as it is.
         worker_hijack_root_logger=False,
         worker_redirect_stdouts=False,
         worker_send_task_events=False,

@@ -1,7 +1,7 @@
-"""Settings of the service and its workers, read from the environment (`MPM_*`).
-
-Both the API and the workers read the same settings, so they live here, in the
-lower of the two packages (the service imports the worker, never the reverse).
+"""The settings every process of the service reads, from the environment (`MPM_*`):
+where the job records and the results are, how the workers run jobs and keep them,
+the logs. The API's own settings (where it listens, what it admits, who may call it)
+are service.settings.ApiSettings, built on these.
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def default_data_dir() -> Path:
 
 
 class Settings(BaseSettings):
-    """Everything configurable, with the environment variable `MPM_<NAME>`."""
+    """The API's and the workers' settings, each from the environment variable `MPM_<NAME>`."""
 
     model_config = SettingsConfigDict(env_prefix="MPM_", extra="ignore")
 
@@ -35,17 +35,6 @@ class Settings(BaseSettings):
         None, description="Redis for the queue and the job records; unset: `mpm serve` embeds one")
     data_dir: Path = Field(default_factory=default_data_dir,
                            description="results (one folder per job) and the embedded Redis' data")
-    host: str = "127.0.0.1"
-    port: int = Field(8000, ge=0, le=65535)
-
-    # Limits checked at submission, before anything is allocated.
-    max_particles: int = Field(2_000_000, gt=0)
-    max_grid_nodes: int = Field(4_000_000, gt=0)
-    max_steps: int = Field(10_000_000, gt=0)
-    max_body_bytes: int = Field(1_000_000, gt=0, description="largest accepted request body")
-    max_concurrent_jobs: int = Field(1000, gt=0, description="queued + running jobs; more answer 429")
-    max_processes: int = Field(default_factory=lambda: os.cpu_count() or 1, gt=0,
-                               description="the most processes (MPI ranks) one job may use; default: the CPUs")
 
     # Workers.
     worker_concurrency: int = Field(1, gt=0, description="jobs one `mpm worker` runs at once")
@@ -55,17 +44,6 @@ class Settings(BaseSettings):
     warmup: bool = Field(True, description="compile the solver kernels when a worker starts")
     lease_seconds: float = Field(30.0, gt=0, description="a running job whose worker is silent this "
                                                           "long is put back on the queue")
-
-    # Access, per-owner quotas and request hardening (service/auth.py, quotas.py, json_depth.py).
-    api_tokens: str | None = Field(None, description="`owner:token,...` or `@FILE` (one owner:token a "
-                                                     "line); unset: no tokens, and 127.0.0.1 only")
-    quota_active_jobs: int = Field(20, gt=0, description="queued + running jobs of one owner")
-    quota_queued_jobs: int = Field(10, gt=0, description="queued jobs of one owner")
-    quota_particle_steps_per_day: float = Field(1e12, gt=0, description="particles x estimated steps "
-                                                "one owner may submit per UTC day")
-    max_json_depth: int = Field(64, gt=0, description="deepest nesting of a JSON request body")
-    cors_origins: str = Field("", description="comma-separated origins a browser may call the API "
-                                              "from; empty: CORS off")
 
     # Nothing lost: checkpoints, attempts, disk (docs/reliability.md).
     checkpoint_seconds: float = Field(60.0, gt=0, description="wall-clock seconds between a job's "
