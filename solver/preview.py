@@ -24,6 +24,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from solver.errors import SolverError
 from solver.results import RESULT_FILE, list_frames, read_frame, read_scene
 
 PREVIEW_FILE = "preview.png"
@@ -56,7 +57,7 @@ def available_fields(datasets: Iterable[str]) -> list[str]:
     return sorted(datasets | derived)
 
 
-class UnknownField(ValueError):
+class UnknownField(SolverError, ValueError):
     """A field a frame does not have and cannot derive; ``available``: those it can draw."""
 
     def __init__(self, field: str, available: list[str]):

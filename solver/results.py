@@ -29,6 +29,8 @@ from typing import Any
 import h5py
 import numpy as np
 
+from solver.errors import SolverError
+
 FORMAT = "mpm-result"
 FORMAT_VERSION = 1
 RESULT_FILE = "result.h5"
@@ -340,7 +342,7 @@ def list_frames(path: str | os.PathLike) -> list[dict[str, Any]]:
         ]
 
 
-class FrameNotFound(IndexError):
+class FrameNotFound(SolverError, IndexError):
     """A frame the result file does not have (``count``: the frames it has, maybe 0)."""
 
     def __init__(self, path: str | os.PathLike, frame: int, count: int):

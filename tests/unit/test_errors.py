@@ -5,13 +5,15 @@ from solver.checkpoint import CheckpointError
 from solver.errors import SolverError
 from solver.examples import ExampleNotFound, load_example
 from solver.expressions import ExpressionError, compile_expression
+from solver.preview import UnknownField
+from solver.results import FrameNotFound
 from solver.scene import SceneError, load_scene
 from solver.stepper import Instability
 
 
-@pytest.mark.parametrize("error,builtin", [(SceneError, ValueError), (ExpressionError, ValueError),
-                                           (CheckpointError, ValueError), (ExampleNotFound, KeyError),
-                                           (Instability, RuntimeError)])
+@pytest.mark.parametrize("error,builtin", [
+    (SceneError, ValueError), (ExpressionError, ValueError), (CheckpointError, ValueError),
+    (ExampleNotFound, KeyError), (Instability, RuntimeError), (FrameNotFound, IndexError), (UnknownField, ValueError)])
 def test_every_solver_error_is_a_solver_error(error, builtin):
     assert issubclass(error, SolverError) and issubclass(error, builtin)
 
