@@ -80,6 +80,7 @@ class ExplicitMPM:
         self.boundary_work = 0.0
         self.scheme = step.SCHEMES[method.scheme]
         self.phases = step.backend_for(scene, general)(self)
+        self.added_hooks = []   # hooks given by add_hook, kept when the grid is placed again
         # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
         self.domain = parallel.decompose(scene, self.shape.SUPPORT)
         self.domain.distribute(self.particles)
@@ -88,6 +89,12 @@ class ExplicitMPM:
         self.place()
         masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
+
+    def add_hook(self, hook) -> None:
+        """Plug an object with any of the hook methods (solver/step/hooks.py) into the step,
+        after the scene's own hooks."""
+        self.added_hooks.append(hook)
+        self.hooks.add(hook)
 
     @property
     def fused(self) -> bool:

@@ -3,7 +3,7 @@ from its MUSL loop, src/fix.h and src/musl.cpp).
 
 A hook is any object with one or more of these methods; at each point the step
 calls the method of every hook that has one, in the order the hooks were made
-(`HOOKS` below, then any added with `Hooks.add`):
+(`HOOKS` below, then any added with `ExplicitMPM.add_hook`):
 
 | point                               | where in the step                                   |
 |-------------------------------------|-----------------------------------------------------|
@@ -90,5 +90,7 @@ HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work]
 
 
 def scene_hooks(sim) -> Hooks:
-    """The hooks of a placed simulation (its grid, constraints and axisymmetry)."""
-    return Hooks(hook for make in HOOKS if (hook := make(sim)) is not None)
+    """The hooks of a placed simulation (its grid, constraints and axisymmetry), then those
+    added with `sim.add_hook`."""
+    made = [hook for make in HOOKS if (hook := make(sim)) is not None]
+    return Hooks(made + list(sim.added_hooks))

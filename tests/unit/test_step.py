@@ -78,7 +78,7 @@ def test_each_scheme_passes_the_hook_points_in_its_order(scheme, formulation, ge
     sim = ExplicitMPM(load_scene(scene(scheme=scheme, formulation=formulation)), general=general)
     assert sim.phases.name == ("general" if general or scheme == "usf" or formulation == "tlmpm" else "fused")
     recorder = Recorder(sim)
-    sim.hooks.add(recorder)
+    sim.add_hook(recorder)
     sim.advance(1e-3)
     assert recorder.calls == ORDER[scheme]
 
@@ -108,7 +108,7 @@ def test_a_force_hook_acts_like_the_body_force_it_adds(general):
     resting["bodies"][0]["geometry"] = {"type": "box", "lower": [0.3, 0.1], "upper": [0.6, 0.4]}
     with_gravity = ExplicitMPM(load_scene({**resting, "gravity": [0.0, -9.81]}), general=general)
     with_hook = ExplicitMPM(load_scene(resting), general=general)
-    with_hook.hooks.add(NodalGravity([0.0, -9.81]))
+    with_hook.add_hook(NodalGravity([0.0, -9.81]))
     for _ in range(50):
         with_gravity.advance(1e-3)
         with_hook.advance(1e-3)
@@ -116,3 +116,13 @@ def test_a_force_hook_acts_like_the_body_force_it_adds(general):
     assert np.max(np.abs(a.stress[:, 1, 1])) > 0.1 * 1000 * 9.81 * 0.3   # the floor carries the block's weight
     for name in ("x", "v", "stress"):
         assert np.max(np.abs(getattr(a, name) - getattr(b, name))) <= 1e-12 * np.max(np.abs(getattr(a, name)))
+
+
+def test_an_added_hook_stays_when_the_grid_is_placed_again():
+    """Processes re-place the grid when slabs move, a restart places everything again."""
+    sim = ExplicitMPM(load_scene(scene()))
+    recorder = Recorder(sim)
+    sim.add_hook(recorder)
+    sim.place()
+    sim.advance(1e-3)
+    assert recorder.calls == ORDER["musl"]
