@@ -170,24 +170,20 @@ class _Parser:
         return kind
 
     def _sum(self) -> str:
-        start = self.token
-        kind = self._product()
-        while self.token.text in ("+", "-"):
-            operator = self._advance()
-            right_start = self.token
-            self._number(kind, start)
-            self._number(self._product(), right_start)
-            self._emit(_BINARY[operator.text], 2, operator)
-        return kind
+        return self._left_associative(("+", "-"), self._product)
 
     def _product(self) -> str:
+        return self._left_associative(("*", "/"), self._unary)
+
+    def _left_associative(self, operators: tuple[str, ...], operand: Callable[[], str]) -> str:
+        """operand (operator operand)*, every operand a number (not a condition)."""
         start = self.token
-        kind = self._unary()
-        while self.token.text in ("*", "/"):
+        kind = operand()
+        while self.token.text in operators:
             operator = self._advance()
             right_start = self.token
             self._number(kind, start)
-            self._number(self._unary(), right_start)
+            self._number(operand(), right_start)
             self._emit(_BINARY[operator.text], 2, operator)
         return kind
 

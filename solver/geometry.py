@@ -84,6 +84,14 @@ class Union:
         return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
 
 
+def _first_and(parts, points: np.ndarray, each) -> np.ndarray:
+    """Inside the first part and, for every other part, `each` of inside it."""
+    inside = parts[0].contains(points)
+    for part in parts[1:]:
+        inside &= each(part.contains(points))
+    return inside
+
+
 @dataclass(frozen=True)
 class Difference:
     """The first part minus all the others."""
@@ -91,10 +99,7 @@ class Difference:
     parts: tuple[Geometry, ...]
 
     def contains(self, points: np.ndarray) -> np.ndarray:
-        inside = self.parts[0].contains(points)
-        for part in self.parts[1:]:
-            inside &= ~part.contains(points)
-        return inside
+        return _first_and(self.parts, points, np.logical_not)
 
     def bounding_box(self) -> BoundingBox:
         return self.parts[0].bounding_box()
@@ -105,10 +110,7 @@ class Intersection:
     parts: tuple[Geometry, ...]
 
     def contains(self, points: np.ndarray) -> np.ndarray:
-        inside = self.parts[0].contains(points)
-        for part in self.parts[1:]:
-            inside &= part.contains(points)
-        return inside
+        return _first_and(self.parts, points, lambda inside: inside)
 
     def bounding_box(self) -> BoundingBox:
         """The overlap of the parts' boxes; lower > upper on some axis means empty."""
