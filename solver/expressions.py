@@ -39,6 +39,13 @@ FUNCTIONS: dict[str, tuple[Callable[..., np.ndarray], int, int | None]] = {
     "sin": (np.sin, 1, 1),
     "cos": (np.cos, 1, 1),
     "tan": (np.tan, 1, 1),
+    "asin": (np.arcsin, 1, 1),
+    "acos": (np.arccos, 1, 1),
+    "atan": (np.arctan, 1, 1),
+    "atan2": (np.arctan2, 2, 2),   # atan2(y, x): the angle of (x, y), in (-pi, pi]
+    "sinh": (np.sinh, 1, 1),
+    "cosh": (np.cosh, 1, 1),
+    "tanh": (np.tanh, 1, 1),
     "exp": (np.exp, 1, 1),
     "log": (np.log, 1, 1),
     "sqrt": (np.sqrt, 1, 1),

@@ -45,6 +45,9 @@ def test_arithmetic_and_precedence(text, expected):
     ("min(x, y, 0.5)", lambda v: np.minimum(np.minimum(v, y), 0.5)),
     ("max(x, y, 0.5)", lambda v: np.maximum(np.maximum(v, y), 0.5)),
     ("where(x < 0, -1, 2)", lambda v: np.where(v < 0, -1.0, 2.0)),
+    ("sinh(x)", np.sinh), ("cosh(x)", np.cosh), ("tanh(x)", np.tanh), ("atan(x)", np.arctan),
+    ("asin(x / 10)", lambda v: np.arcsin(v / 10)), ("acos(x / 10)", lambda v: np.arccos(v / 10)),
+    ("atan2(y, x)", lambda v: np.arctan2(y, v)),
 ])
 def test_every_function(text, reference):
     np.testing.assert_array_equal(evaluate(text, x=x, y=y), reference(x))
@@ -171,3 +174,17 @@ def test_nesting_just_within_the_limit_is_accepted():
 def test_not_a_string():
     with pytest.raises(ExpressionError, match="must be a string"):
         compile_expression(3, XYZ)
+
+
+def test_inverse_and_hyperbolic_identities():
+    """cosh^2 - sinh^2 = 1, tanh = sinh / cosh, atan2 gives the quadrant that atan cannot."""
+    t = np.linspace(-3.0, 3.0, 13)
+    np.testing.assert_allclose(evaluate("cosh(t)**2 - sinh(t)**2", ("t",), t=t), 1.0, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(evaluate("tanh(t) - sinh(t) / cosh(t)", ("t",), t=t), 0.0, atol=1e-15)
+    assert evaluate("atan2(1, -1)") == pytest.approx(3 * np.pi / 4)
+    assert evaluate("atan(1 / -1)") == pytest.approx(-np.pi / 4)
+
+
+def test_atan2_takes_two_arguments():
+    with pytest.raises(ExpressionError, match="atan2"):
+        compile_expression("atan2(x)", ("x",))
