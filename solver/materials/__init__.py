@@ -18,13 +18,13 @@ Particles are sorted by material, so each model works on one contiguous slice.
 """
 from __future__ import annotations
 
-from solver.materials.fluid import Fluid
-from solver.materials.ideal_gas import IdealGas
-from solver.materials.j2_plasticity import J2Plasticity
-from solver.materials.johnson_cook import JohnsonCook
-from solver.materials.linear_elastic import LinearElastic
-from solver.materials.neo_hookean import NeoHookean
-from solver.materials.rigid import Rigid
+from solver.materials.kernels.fluid import Fluid
+from solver.materials.kernels.ideal_gas import IdealGas
+from solver.materials.kernels.j2_plasticity import J2Plasticity
+from solver.materials.kernels.johnson_cook import JohnsonCook
+from solver.materials.kernels.linear_elastic import LinearElastic
+from solver.materials.kernels.neo_hookean import NeoHookean
+from solver.materials.kernels.rigid import Rigid
 
 REGISTRY = {
     "linear_elastic": LinearElastic,

@@ -41,7 +41,7 @@ from types import ModuleType, SimpleNamespace
 import numba
 import numpy as np
 
-from solver.shape import bernstein, cubic_bspline, gimp, linear, quadratic_bspline
+from solver.shape.kernels import bernstein, cubic_bspline, gimp, linear, quadratic_bspline
 
 # cpGIMP is GIMP with boxes that follow the stretch: the same kernel, another evaluate.
 _cpgimp = SimpleNamespace(__name__="solver.shape.cpgimp", SUPPORT=gimp.SUPPORT, weights=gimp.weights,

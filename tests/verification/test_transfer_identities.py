@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from solver import kernels
-from solver.shape import linear
+from solver.shape.kernels import linear
 from solver.threads import ScatterCopies
 
 ROUND_OFF = 1e-12

@@ -12,7 +12,7 @@ import numpy as np
 from numba import njit, prange
 
 from solver.kernels import determinant
-from solver.materials.elastic import IsotropicElastic
+from solver.materials.kernels.elastic import IsotropicElastic
 
 
 @njit(parallel=True, cache=True)

@@ -18,8 +18,8 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from solver.materials import objective
-from solver.materials.linear_elastic import LinearElastic
+from solver.materials.kernels import objective
+from solver.materials.kernels.linear_elastic import LinearElastic
 from solver.threads import block_bounds
 
 

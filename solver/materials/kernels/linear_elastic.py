@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.materials.elastic import IsotropicElastic
+from solver.materials.kernels.elastic import IsotropicElastic
 
 
 @njit(parallel=True, cache=True)

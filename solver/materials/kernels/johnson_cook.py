@@ -43,9 +43,9 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from solver.materials import damage as damage_model
-from solver.materials import eos, objective
-from solver.materials.elastic import IsotropicElastic
+from solver.materials.kernels import damage as damage_model
+from solver.materials.kernels import eos, objective
+from solver.materials.kernels.elastic import IsotropicElastic
 from solver.threads import block_bounds
 
 # Layout of the flow-stress parameter array.

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from solver.shape.tensor import scatter
+from solver.shape.kernels.tensor import scatter
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 3
