@@ -37,6 +37,7 @@ from pydantic_core import PydanticCustomError
 
 from solver import capabilities
 from solver import geometry as geometry_shapes
+from solver import shape as shape_functions
 from solver.expressions import ExpressionError, compile_expression
 from solver.parallel.slabs import scene_problems as slab_problems
 
@@ -177,7 +178,8 @@ def _upper_above_lower(upper: list[float] | None, info: ValidationInfo) -> list[
 class Method(_Model):
     formulation: Literal["ulmpm", "tlmpm"] = "ulmpm"
     scheme: Literal["musl", "usl", "usf"] = "musl"
-    shape_function: Literal["linear", "gimp", "cpgimp", "cubic_bspline", "quadratic_bspline", "bernstein"] = "linear"
+    # the registered shape functions, in the registry's order (the order error messages list them)
+    shape_function: Literal[tuple(shape_functions.REGISTRY)] = "linear"
     transfer: Literal["flip", "pic", "apic"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
 
@@ -194,22 +196,18 @@ class Method(_Model):
     @field_validator("shape_function")
     @classmethod
     def _shape_function_allowed(cls, value: str, info: ValidationInfo) -> str:
-        # Bernstein functions are only C0 across cells: [R] 3.5 recommends them for TLMPM only.
-        if value == "bernstein" and info.data.get("formulation") == "ulmpm":
-            raise _error("'bernstein' is only supported with formulation 'tlmpm': its gradient jumps across "
-                         "element ends and it does not interpolate, so particles that move across elements "
-                         "(as they do in ulmpm) get the cell-crossing force noise; tlmpm evaluates it once, "
-                         "in the reference configuration")
+        formulation = info.data.get("formulation")
+        declared = shape_functions.REGISTRY[value]
+        if formulation is not None and formulation not in declared.formulations:
+            raise _error(declared.formulation_refusal)
         return _require_supported(value, "SHAPE_FUNCTIONS")
 
     @field_validator("transfer")
     @classmethod
     def _transfer_supported(cls, value: str, info: ValidationInfo) -> str:
-        # see solver/transfer.py: C_p = sum v~_I grad w^T is unbounded on nearly empty nodes
-        if value == "apic" and info.data.get("shape_function") == "linear":
-            raise _error("'apic' does not work with 'linear' hat functions: the affine matrix takes the "
-                         "unbounded accelerations of nearly empty nodes, whose hat gradients do not vanish, "
-                         "and the run blows up; use gimp, quadratic_bspline or cubic_bspline")
+        shape_function = info.data.get("shape_function")
+        if value == "apic" and shape_function is not None and not shape_functions.REGISTRY[shape_function].apic:
+            raise _error(shape_functions.REGISTRY[shape_function].apic_refusal)
         return _require_supported(value, "TRANSFERS")
 
 
@@ -656,7 +654,7 @@ class Scene(_Model):
             upper = self._bodies_box()[1] + 2 * np.array(self.cell_sizes())
         cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
         cells = [max(1, math.ceil(n - 1e-9)) for n in cells]
-        if self.method.shape_function == "bernstein":   # its elements span two cells
+        if shape_functions.REGISTRY[self.method.shape_function].even_cells:   # elements of two cells (bernstein)
             cells = [n + n % 2 for n in cells]
         return tuple(cells)
 
@@ -791,25 +789,29 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
 
 def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
     """Grids too small for a function's stencil; bodies too close to the grid ends
-    for quadratic B-splines (no boundary-modified variant: a particle within h/2 of
-    a grid end would need a node beyond it)."""
+    for functions without a boundary-modified variant (quadratic B-splines: a
+    particle within h/2 of a grid end would need a node beyond it)."""
     name = scene.method.shape_function
-    least = {"cubic_bspline": 3, "quadratic_bspline": 2, "gimp": 2, "cpgimp": 2}.get(name)
-    if least is not None and min(scene.grid_shape()) < least:
-        return [("grid.cell_size", f"{name!r} needs at least {least} cells per axis, "
+    declared = shape_functions.REGISTRY[name]
+    if min(scene.grid_shape()) < declared.least_cells:
+        return [("grid.cell_size", f"{name!r} needs at least {declared.least_cells} cells per axis, "
                                    f"the grid has {list(scene.grid_shape())}")]
-    if name != "quadratic_bspline":
+    if not declared.end_margin:
         return []
     problems = []
-    half = 0.5 * np.array(scene.cell_sizes())
+    margin = declared.end_margin * np.array(scene.cell_sizes())
     grid_lower, grid_upper = np.array(scene.grid_lower()), np.array(scene.grid_upper())
     for i, body in enumerate(scene.bodies):
         lower, upper = body.geometry.shape().bounding_box()
-        if np.any(lower < grid_lower + half - 1e-9 * half) or np.any(upper > grid_upper - half + 1e-9 * half):
-            problems.append((f"bodies[{i}].geometry", "with 'quadratic_bspline' a body must keep half a cell "
+        if np.any(lower < grid_lower + margin - 1e-9 * margin) or np.any(upper > grid_upper - margin + 1e-9 * margin):
+            problems.append((f"bodies[{i}].geometry", f"with {name!r} a body must keep {_cells(declared.end_margin)} "
                                                       "from the grid ends (its particles would need nodes "
                                                       "beyond the grid); enlarge the grid"))
     return problems
+
+
+def _cells(count: float) -> str:
+    return "half a cell" if count == 0.5 else f"{_fmt(count)} cells"
 
 
 def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:

@@ -23,7 +23,6 @@ from numba import njit, prange
 from solver.shape.kernels.tensor import scatter
 from solver.threads import block_bounds, first_of
 
-SUPPORT = 3
 
 
 @njit(parallel=True, cache=True)

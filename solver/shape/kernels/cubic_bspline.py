@@ -18,7 +18,6 @@ from numba import njit, prange
 from solver.shape.kernels.tensor import scatter
 from solver.threads import block_bounds, first_of
 
-SUPPORT = 4
 
 
 @njit(cache=True)

@@ -32,7 +32,6 @@ from numba import njit, prange
 from solver.shape.kernels.tensor import scatter
 from solver.threads import block_bounds, first_of
 
-SUPPORT = 3
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
 
 

@@ -11,7 +11,6 @@ from numba import njit, prange
 
 from solver.threads import block_bounds, first_of
 
-SUPPORT = 2  # nodes per axis
 
 
 @njit(parallel=True, cache=True)

@@ -14,7 +14,6 @@ from numba import njit, prange
 from solver.shape.kernels.tensor import scatter
 from solver.threads import block_bounds, first_of
 
-SUPPORT = 3
 _TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
 
