@@ -3,8 +3,9 @@
 The scene schema (solver/scene.py) describes the whole contract of SCENE.md; a
 feature listed there but not here is rejected at validation with a
 "not supported yet" error naming the field. An issue that implements a feature
-adds it here in the same change, or, for shape functions, declares it in
-solver/shape/: that set is the registry's names, read each time it is used.
+adds it here in the same change, or, for materials, shape functions and output
+fields, registers it: those three sets are the registries' names
+(solver.materials, solver.shape, solver.fields), read each time they are used.
 """
 
 from collections.abc import Callable, Iterable, Iterator, Set
@@ -12,7 +13,6 @@ from collections.abc import Callable, Iterable, Iterator, Set
 FORMULATIONS = frozenset({"ulmpm", "tlmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
 TRANSFERS = frozenset({"flip", "pic", "apic"})
-MATERIAL_MODELS = frozenset({"linear_elastic", "neo_hookean", "fluid", "ideal_gas", "rigid", "j2_plasticity", "johnson_cook"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})
 WALL_MODES = frozenset({"stick", "slip"})
@@ -23,8 +23,8 @@ MAX_PROCESSES = 64   # MPI ranks (solver/parallel); the service caps jobs furthe
 class RegisteredNames(Set):
     """The current names of a registry, as a read-only set (`in`, `|`, `-` give frozensets).
 
-    A live view rather than a frozenset taken at import: whatever is registered
-    later is supported at once. Tests replace it with a plain set to simulate a feature
+    A live view rather than a frozenset taken at import: a material registered later
+    is supported at once. Tests replace it with a plain set to simulate a feature
     that is not supported yet; monkeypatch puts this view back afterwards."""
 
     def __init__(self, names: Callable[[], Iterable[str]]):
@@ -47,19 +47,25 @@ class RegisteredNames(Set):
         return f"RegisteredNames({sorted(self)})"
 
 
-# Imported when the set is read, not here: solver.shape loads after this module.
+# The registries import the scene's building blocks (solver/schema.py), which read
+# this module: they are imported when a set is read, not here.
+
+def _material_models() -> Iterable[str]:
+    from solver import materials
+    return materials.names()
+
 
 def _shape_functions() -> Iterable[str]:
     from solver import shape
     return shape.REGISTRY
 
 
-SHAPE_FUNCTIONS = RegisteredNames(_shape_functions)
+def _output_fields() -> Iterable[str]:
+    from solver import fields
+    return fields.names()
 
+
+MATERIAL_MODELS = RegisteredNames(_material_models)
+SHAPE_FUNCTIONS = RegisteredNames(_shape_functions)
 # Output fields the solver can write per particle (id, body and mass are always written).
-OUTPUT_FIELDS = frozenset({
-    "position", "velocity", "stress", "mass", "volume", "density", "pressure",
-    "velocity_magnitude", "von_mises", "deformation_gradient", "strain_energy_density",
-    "pressure_smoothed", "internal_energy",
-    "plastic_strain", "damage", "temperature",
-})
+OUTPUT_FIELDS = RegisteredNames(_output_fields)

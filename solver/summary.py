@@ -15,7 +15,7 @@ from pydantic import BaseModel, Field
 
 from solver import shape as shape_functions
 from solver.expressions import compile_expression
-from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, IdealGas, Scene
+from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, Scene
 from solver.seeding import count_particles
 
 # Assumed solver throughput in particle-steps per second (one process): a rough
@@ -87,10 +87,7 @@ def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
 
 
 def _wave_speed(scene: Scene, body: Body) -> float:
-    material = scene.materials[body.material]
-    if isinstance(material, IdealGas):
-        return material.sound_speed(body.initial_density, body.initial_pressure)
-    return material.dilatational_wave_speed() or 0.0
+    return scene.materials[body.material].initial_wave_speed(body)
 
 
 def _largest_speed(scene: Scene, body: Body) -> float:

@@ -32,6 +32,7 @@ import numpy as np
 from numba import njit, prange
 
 from solver.kernels import determinant
+from solver.materials.ideal_gas import body_state
 from solver.threads import block_bounds
 
 
@@ -87,12 +88,10 @@ class IdealGas:
         self.wave_speed = 0.0
 
     def init_particles(self, particles, sl: slice, scene) -> None:
-        """Initial state from the bodies: e = p / ((gamma - 1) rho), sigma = -p I (mass is rho V already)."""
+        """Initial stress -p I and sound speed from the bodies (the registry has set e;
+        the mass is rho V already)."""
         self.cell = min(scene.cell_sizes())
-        body = particles.body[sl]
-        density = np.array([b.initial_density or 0.0 for b in scene.bodies])[body]
-        pressure = np.array([b.initial_pressure or 0.0 for b in scene.bodies])[body]
-        particles.require("internal_energy")[sl] = pressure / ((self.gamma - 1.0) * density)
+        density, pressure = body_state(scene, particles.body[sl])
         stress = particles.stress[sl]
         stress[:] = 0.0
         for a in range(3):

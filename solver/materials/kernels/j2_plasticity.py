@@ -61,9 +61,6 @@ class J2Plasticity(LinearElastic):
         self.yield_stress = config.yield_stress
         self.hardening = config.hardening_modulus
 
-    def init_particles(self, particles, sl: slice, scene) -> None:
-        particles.require("plastic_strain")
-
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
                 dt, self.bulk, self.mu, self.yield_stress, self.hardening, numba.get_num_threads())

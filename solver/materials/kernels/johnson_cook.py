@@ -27,7 +27,8 @@ Per particle and step (stress sigma = s - p I, p positive in compression):
 
 Per-particle state: plastic_strain, plastic_strain_rate, temperature (the body's
 initial_temperature, else room_temperature), and damage (+ damage_init) only when
-the material has a damage model or a failure criterion.
+the material has a damage model or a failure criterion (declared, with their start
+values, in solver/materials/johnson_cook.py).
 The stored energy is a function of the current state, the energy of the stress
 the particle carries: s:s / (4 G') per unit volume plus the work of the EOS's
 cold pressure to the current mu (eos.stored_energy), in tension times (1 - D) as
@@ -197,23 +198,6 @@ class JohnsonCook(IsotropicElastic):
         self.failure = damage_model.failure_parameters(config.failure)
         self.reference_wave_speed = math.sqrt((self.bulk + 4.0 / 3.0 * self.mu) / self.density)
         self.wave_speed = self.reference_wave_speed
-
-    @property
-    def tracks_damage(self) -> bool:
-        return self.config.damage is not None or self.config.failure is not None
-
-    def init_particles(self, particles, sl: slice, scene) -> None:
-        particles.require("plastic_strain")
-        particles.require("plastic_strain_rate")
-        temperature = particles.require("temperature", fill=math.nan)[sl]
-        temperature[:] = self.config.room_temperature
-        for b, body in enumerate(scene.bodies):
-            if body.initial_temperature is not None:
-                temperature[particles.body[sl] == b] = body.initial_temperature
-        if self.tracks_damage:
-            particles.require("damage")
-        if self.config.damage is not None:
-            particles.require("damage_init")
 
     def _optional(self, particles, name: str, sl: slice) -> np.ndarray:
         return particles.extra[name][sl] if name in particles.extra else np.zeros(0)

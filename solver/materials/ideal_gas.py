@@ -1,0 +1,57 @@
+"""The `ideal_gas` material: an ideal gas with artificial viscosity ([R] 5.4.2; the
+energy and stress update is solver/materials/kernels/ideal_gas.py). It has no
+density of its own: each body gives its initial density and pressure."""
+
+import math
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, Strict
+
+from solver.materials.registry import MaterialType, StateVariable
+from solver.schema import BaseMaterial, NonNegative, SceneModel
+
+
+class ArtificialViscosity(SceneModel):
+    """q = rho L_e (quadratic L_e D_kk^2 - linear a D_kk) in compression ([R] eq. 5.35):
+    von Neumann-Richtmyer's quadratic and Landshoff's linear term; 0 and 0 turn it off.
+    The defaults are the usual bulk viscosity of explicit codes (1.5^2 and 0.06)."""
+
+    quadratic: NonNegative = 2.25
+    linear: NonNegative = 0.06
+
+
+class IdealGas(BaseMaterial):
+    """Ideal gas; each body gives its initial density and pressure."""
+
+    model: Literal["ideal_gas"]
+    gamma: Annotated[float, Strict(), Field(gt=1)] = 1.4
+    artificial_viscosity: ArtificialViscosity = Field(default_factory=ArtificialViscosity)
+
+    def sound_speed(self, density: float, pressure: float) -> float:
+        """sqrt(gamma p / rho); the wave speed depends on the body's state."""
+        return math.sqrt(self.gamma * pressure / density)
+
+    def initial_wave_speed(self, body) -> float:
+        return self.sound_speed(body.initial_density, body.initial_pressure)
+
+
+def body_state(scene, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(density, pressure) of each particle at t = 0, from its body (`body`: body indices)."""
+    density = np.array([b.initial_density or 0.0 for b in scene.bodies])[body]
+    pressure = np.array([b.initial_pressure or 0.0 for b in scene.bodies])[body]
+    return density, pressure
+
+
+def _initial_internal_energy(config: IdealGas, scene, body: np.ndarray) -> np.ndarray:
+    """e = p / ((gamma - 1) rho)."""
+    density, pressure = body_state(scene, body)
+    return pressure / ((config.gamma - 1.0) * density)
+
+
+MATERIAL = MaterialType(
+    schema=IdealGas,
+    solver_class="solver.materials.kernels.ideal_gas:IdealGas",
+    # the specific internal energy e: the gas's state besides the particle's volume
+    state=(StateVariable("internal_energy", output=True, initial=_initial_internal_energy),),
+)
