@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import shape
-
+from solver import materials, shape
 from solver.state import make_stencil
 
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))   # xx yy zz yz xz xy
@@ -40,11 +39,6 @@ def through_grid(sim, values: np.ndarray) -> np.ndarray:
     return (s.w * node_value[s.idx]).sum(axis=1)
 
 
-def _internal_energy(sim) -> np.ndarray:
-    """Specific internal energy of gas particles, 0 elsewhere."""
-    return sim.particles.extra.get("internal_energy", np.zeros(sim.particles.count))
-
-
 def _strain_energy_density(sim) -> np.ndarray:
     p = sim.particles
     out = np.zeros(p.count)
@@ -54,7 +48,8 @@ def _strain_energy_density(sim) -> np.ndarray:
 
 
 def _state(name: str, absent: float):
-    """A per-particle state variable of the materials that track it; `absent` elsewhere."""
+    """A per-particle state variable of the materials that track it; `absent` elsewhere
+    (and everywhere when no material of the run tracks it)."""
     def field(sim) -> np.ndarray:
         values = sim.particles.extra.get(name)
         return values if values is not None else np.full(sim.particles.count, absent)
@@ -70,16 +65,33 @@ FIELDS = {
     "density": lambda sim: sim.particles.mass / sim.particles.volume,
     "pressure": lambda sim: pressure(sim.particles.stress),
     "pressure_smoothed": lambda sim: through_grid(sim, pressure(sim.particles.stress)),
-    "internal_energy": _internal_energy,
     "von_mises": lambda sim: von_mises(sim.particles.stress),
     "velocity_magnitude": lambda sim: np.linalg.norm(sim.particles.v, axis=1),
     "deformation_gradient": lambda sim: sim.particles.F.reshape(sim.particles.count, -1),
     "strain_energy_density": _strain_energy_density,
-    # 0 for materials without plasticity or damage; temperature NaN where no model tracks it
-    "plastic_strain": _state("plastic_strain", 0.0),
-    "damage": _state("damage", 0.0),
-    "temperature": _state("temperature", np.nan),
 }
+"""The fields of every scene; the materials add their state's (plastic_strain, damage,
+temperature, internal_energy, ...: solver.materials.output_fields)."""
+
+
+def names() -> frozenset[str]:
+    """Every output field the solver can write now."""
+    return frozenset(FIELDS) | frozenset(_material_outputs())
+
+
+def field(name: str):
+    """The function sim -> per-particle values of output field `name`."""
+    if name in FIELDS:
+        return FIELDS[name]
+    return _state(name, _material_outputs()[name])
+
+
+def _material_outputs() -> dict[str, float]:
+    outputs = materials.output_fields()
+    taken = sorted(outputs.keys() & FIELDS.keys())
+    if taken:   # a material's state would hide a field of every scene, or the other way round
+        raise ValueError(f"material state declared as output fields that every scene has: {taken}")
+    return outputs
 
 
 def frame_fields(sim, names) -> dict[str, np.ndarray]:
@@ -87,5 +99,5 @@ def frame_fields(sim, names) -> dict[str, np.ndarray]:
     p = sim.particles
     out = {"id": p.id, "body": p.body, "mass": p.mass, "position": p.x}
     for name in names:
-        out[name] = np.ascontiguousarray(FIELDS[name](sim))
+        out[name] = np.ascontiguousarray(field(name)(sim))
     return out

@@ -34,7 +34,7 @@ DT_FACTOR = 0.2                         # dt = 0.2 h / c for every method ([R] 6
 # that factor: dt = 0.2 h / c_dil would be unstable near the peak, 1/8 of it is not.
 VORTEX_DT_FACTOR = DT_FACTOR / 8
 # Particles per cell and direction: 2 for every function ([R] 4.1's "at least two").
-# A Bernstein element spans two cells here (solver/shape/bernstein.py), so that is 4
+# A Bernstein element spans two cells here (solver/shape/kernels/bernstein.py), so that is 4
 # per element and direction, against the 3 of VERIFICATION_CASES A.14.
 PPC = 2
 

@@ -12,7 +12,11 @@ Validation happens in two passes, both reporting every problem they find:
 Features of the contract that the solver does not implement yet (see
 ``solver.capabilities``) are rejected with "... is not supported yet" at the
 field's path. The capability sets are read at validation time, so implementing a
-feature only edits ``capabilities.py``.
+feature only edits ``capabilities.py``, or registers it.
+
+The materials (their scene entries) and the shape functions come from their
+registries (solver.materials, solver.shape); the building blocks shared with the
+material declarations are in solver/schema.py. This module loads without numba.
 """
 
 import json
@@ -23,8 +27,6 @@ from typing import Annotated, Any, Literal, Union
 
 import numpy as np
 from pydantic import (
-    BaseModel,
-    ConfigDict,
     Field,
     PlainValidator,
     Strict,
@@ -33,13 +35,27 @@ from pydantic import (
     field_validator,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
 
 from solver import capabilities
+from solver import materials as material_registry
+from solver import shape as shape_functions
 from solver import geometry as geometry_shapes
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
+from solver.materials.ideal_gas import IdealGas
+from solver.materials.rigid import Rigid
 from solver.parallel.slabs import scene_problems as slab_problems
+from solver.schema import (
+    Boolean,
+    NonNegative,
+    Positive,
+    Real,
+    SceneModel,
+    fmt,
+    problems_at,
+    require_supported,
+    scene_error,
+)
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")
@@ -66,34 +82,13 @@ class SceneError(SolverError, ValueError):
         super().__init__("\n".join(f"{e['path']}: {e['message']}" if e["path"] else e["message"] for e in errors))
 
 
-def _error(message: str) -> PydanticCustomError:
-    # "{detail}" keeps braces inside the message (e.g. quoted user text) literal.
-    return PydanticCustomError("scene_error", "{detail}", {"detail": message})
-
-
-def _problems(problems: list[tuple[str, str]]) -> PydanticCustomError:
-    """Several problems at paths relative to the model that raises them."""
-    detail = "; ".join(f"{path}: {message}" if path else message for path, message in problems)
-    return PydanticCustomError("scene_problems", "{detail}", {"detail": detail, "problems": problems})
-
-
-def _require_supported(value: Any, capability: str) -> Any:
-    if value not in getattr(capabilities, capability):
-        raise _error(f"{value!r} is not supported yet")
-    return value
-
-
 # --------------------------------------------------------------------------- value types
-
-def _fmt(value: float) -> str:
-    return f"{value:g}"
-
 
 def _finite_number(value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _error("must be a number")
+        raise scene_error("must be a number")
     if not math.isfinite(value):
-        raise _error("must be a finite number")
+        raise scene_error("must be a finite number")
     return float(value)
 
 
@@ -106,10 +101,10 @@ def _number_or_expression(variables: tuple[str, ...]):
                 compile_expression(value, variables)
             except ExpressionError as exc:
                 shown = value if len(value) <= 80 else value[:60] + "..."  # not a huge input echoed
-                raise _error(f"invalid expression {shown!r}: {exc}") from None
+                raise scene_error(f"invalid expression {shown!r}: {exc}") from None
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise _error(f"must be a number or an expression string in {', '.join(variables)}")
+            raise scene_error(f"must be a number or an expression string in {', '.join(variables)}")
         return _finite_number(value)
 
     return Annotated[Union[float, str], PlainValidator(validate, json_schema_input_type=Union[float, str])]
@@ -118,14 +113,14 @@ def _number_or_expression(variables: tuple[str, ...]):
 def _cell_size(value: Any) -> float | list[float]:
     if isinstance(value, (list, tuple)):
         if not value:
-            raise _error("must not be empty")
+            raise scene_error("must not be empty")
         sizes = [_finite_number(v) for v in value]
         if any(size <= 0 for size in sizes):
-            raise _error(f"every cell size must be > 0, got {value}")
+            raise scene_error(f"every cell size must be > 0, got {value}")
         return sizes
     size = _finite_number(value)
     if size <= 0:
-        raise _error("must be > 0")
+        raise scene_error("must be > 0")
     return size
 
 
@@ -134,13 +129,9 @@ def _energies(value: Any) -> bool | int:
         return value
     if isinstance(value, int) and value >= 1:
         return value
-    raise _error("must be true, false or a whole number of steps >= 1")
+    raise scene_error("must be true, false or a whole number of steps >= 1")
 
 
-Real = Annotated[float, Strict()]  # ints are accepted, booleans and strings are not
-Boolean = Annotated[bool, Strict()]
-Positive = Annotated[float, Strict(), Field(gt=0)]
-NonNegative = Annotated[float, Strict(), Field(ge=0)]
 Vector = Annotated[list[Real], Field(min_length=1, max_length=3)]
 SpaceValue = _number_or_expression(SPACE_VARIABLES)
 TimeValue = _number_or_expression(TIME_VARIABLES)
@@ -155,66 +146,58 @@ Energies = Annotated[
 ]
 
 
-class _Model(BaseModel):
-    # Every model of the scene: unknown keys are errors, NaN and infinity too.
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-
-
 def _upper_above_lower(upper: list[float] | None, info: ValidationInfo) -> list[float] | None:
     """Field validator of ``upper`` (declared after ``lower``) in boxes and the grid."""
     lower = info.data.get("lower")
     if upper is None or lower is None:
         return upper
     if len(lower) != len(upper):
-        raise _error(f"has {len(upper)} components but lower has {len(lower)}")
-    problems = [(f"[{i}]", f"must be > lower[{i}] = {_fmt(lo)}") for i, (lo, up) in enumerate(zip(lower, upper)) if not up > lo]
+        raise scene_error(f"has {len(upper)} components but lower has {len(lower)}")
+    problems = [(f"[{i}]", f"must be > lower[{i}] = {fmt(lo)}") for i, (lo, up) in enumerate(zip(lower, upper)) if not up > lo]
     if problems:
-        raise _problems(problems)
+        raise problems_at(problems)
     return upper
 
 
 # --------------------------------------------------------------------------- method, grid
 
-class Method(_Model):
+class Method(SceneModel):
     formulation: Literal["ulmpm", "tlmpm"] = "ulmpm"
     scheme: Literal["musl", "usl", "usf"] = "musl"
-    shape_function: Literal["linear", "gimp", "cpgimp", "cubic_bspline", "quadratic_bspline", "bernstein"] = "linear"
+    # the registered shape functions, in the registry's order (the order error messages list them)
+    shape_function: Literal[tuple(shape_functions.REGISTRY)] = "linear"
     transfer: Literal["flip", "pic", "apic"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
 
     @field_validator("formulation")
     @classmethod
     def _formulation_supported(cls, value: str) -> str:
-        return _require_supported(value, "FORMULATIONS")
+        return require_supported(value, "FORMULATIONS")
 
     @field_validator("scheme")
     @classmethod
     def _scheme_supported(cls, value: str) -> str:
-        return _require_supported(value, "SCHEMES")
+        return require_supported(value, "SCHEMES")
 
     @field_validator("shape_function")
     @classmethod
     def _shape_function_allowed(cls, value: str, info: ValidationInfo) -> str:
-        # Bernstein functions are only C0 across cells: [R] 3.5 recommends them for TLMPM only.
-        if value == "bernstein" and info.data.get("formulation") == "ulmpm":
-            raise _error("'bernstein' is only supported with formulation 'tlmpm': its gradient jumps across "
-                         "element ends and it does not interpolate, so particles that move across elements "
-                         "(as they do in ulmpm) get the cell-crossing force noise; tlmpm evaluates it once, "
-                         "in the reference configuration")
-        return _require_supported(value, "SHAPE_FUNCTIONS")
+        formulation = info.data.get("formulation")
+        declared = shape_functions.REGISTRY[value]
+        if formulation is not None and formulation not in declared.formulations:
+            raise scene_error(declared.formulation_refusal)
+        return require_supported(value, "SHAPE_FUNCTIONS")
 
     @field_validator("transfer")
     @classmethod
     def _transfer_supported(cls, value: str, info: ValidationInfo) -> str:
-        # see solver/transfer.py: C_p = sum v~_I grad w^T is unbounded on nearly empty nodes
-        if value == "apic" and info.data.get("shape_function") == "linear":
-            raise _error("'apic' does not work with 'linear' hat functions: the affine matrix takes the "
-                         "unbounded accelerations of nearly empty nodes, whose hat gradients do not vanish, "
-                         "and the run blows up; use gimp, quadratic_bspline or cubic_bspline")
-        return _require_supported(value, "TRANSFERS")
+        shape_function = info.data.get("shape_function")
+        if value == "apic" and shape_function is not None and not shape_functions.REGISTRY[shape_function].apic:
+            raise scene_error(shape_functions.REGISTRY[shape_function].apic_refusal)
+        return require_supported(value, "TRANSFERS")
 
 
-class Grid(_Model):
+class Grid(SceneModel):
     """The background grid. ``lower``/``upper`` may be left out only with tlmpm; the
     grid then covers the bodies' bounding box padded by two cells."""
 
@@ -227,174 +210,31 @@ class Grid(_Model):
 
 # --------------------------------------------------------------------------- materials
 
-class _Material(_Model):
-    @field_validator("model", check_fields=False)
-    @classmethod
-    def _model_supported(cls, value: str) -> str:
-        return _require_supported(value, "MATERIAL_MODELS")
-
-    def dilatational_wave_speed(self) -> float | None:
-        """Speed of the fastest wave, for the adaptive time step; None when the
-        material alone does not determine it."""
-        return None
+def _material_union() -> Any:
+    """The registered materials' scene entries, told apart by their "model"."""
+    schemas = tuple(material.schema for material in material_registry.REGISTRY.values())
+    return Annotated[Union[schemas], Field(discriminator="model")]
 
 
-class _ElasticMaterial(_Material):
-    """Isotropic elastic constants shared by the solid models."""
-
-    density: Positive
-    youngs_modulus: Positive
-    poisson_ratio: Annotated[float, Strict(), Field(ge=0, lt=0.5)]
-
-    def lame_parameters(self) -> tuple[float, float]:
-        """(lambda, mu) from Young's modulus and Poisson's ratio."""
-        e, nu = self.youngs_modulus, self.poisson_ratio
-        return e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))
-
-    @property
-    def bulk_modulus(self) -> float:
-        return self.youngs_modulus / (3 * (1 - 2 * self.poisson_ratio))
-
-    @property
-    def shear_modulus(self) -> float:
-        return self.lame_parameters()[1]
-
-    def dilatational_wave_speed(self) -> float:
-        """sqrt((lambda + 2 mu) / rho)."""
-        lam, mu = self.lame_parameters()
-        return math.sqrt((lam + 2 * mu) / self.density)
+Material = _material_union()
 
 
-class LinearElastic(_ElasticMaterial):
-    model: Literal["linear_elastic"]
-
-
-class NeoHookean(_ElasticMaterial):
-    model: Literal["neo_hookean"]
-
-
-class J2Plasticity(_ElasticMaterial):
-    model: Literal["j2_plasticity"]
-    yield_stress: Positive
-    hardening_modulus: NonNegative = 0.0  # 0: perfectly plastic
-
-
-class LinearEOS(_Model):
-    model: Literal["linear"]
-
-
-class MieGruneisenEOS(_Model):
-    model: Literal["mie_gruneisen"]
-    c0: Positive  # bulk speed of sound
-    s: NonNegative  # slope of the linear Hugoniot
-    gamma0: NonNegative  # Grüneisen gamma of the reference state
-
-
-class JohnsonCookDamage(_Model):
-    model: Literal["johnson_cook"]
-    D1: Real
-    D2: Real
-    D3: Real
-    D4: Real
-    D5: Real
-    evolution_factor: Positive = 10.0  # D = k (D_init - 1): 10 in [K] eq. 2.16, 1 in [R] Alg. 13
-
-
-class Failure(_Model):
-    """MPM3DMP 5.3: a particle fails when either criterion given is met."""
-
-    plastic_strain: Positive | None = None  # equivalent plastic strain at failure
-    min_pressure: Annotated[float, Strict(), Field(lt=0)] | None = None  # failure pressure (a tension, < 0)
-
-
-class JohnsonCook(_ElasticMaterial):
-    model: Literal["johnson_cook"]
-    A: Positive
-    B: NonNegative
-    n: NonNegative
-    C: NonNegative
-    reference_strain_rate: Positive
-    m: Positive
-    room_temperature: NonNegative
-    melt_temperature: Positive
-    specific_heat: Positive
-    taylor_quinney: Annotated[float, Strict(), Field(ge=0, le=1)]
-    eos: Annotated[Union[LinearEOS, MieGruneisenEOS], Field(discriminator="model")] = LinearEOS(model="linear")
-    damage: JohnsonCookDamage | None = None
-    failure: Failure | None = None
-
-    def dilatational_wave_speed(self) -> float:
-        """sqrt((K + 4/3 G) / rho) with the EOS bulk modulus (rho0 c0^2 for Mie-Gruneisen)."""
-        bulk = self.density * self.eos.c0**2 if self.eos.model == "mie_gruneisen" else self.bulk_modulus
-        return math.sqrt((bulk + 4 * self.shear_modulus / 3) / self.density)
-
-    @field_validator("melt_temperature")
-    @classmethod
-    def _melt_above_room(cls, value: float, info: ValidationInfo) -> float:
-        room = info.data.get("room_temperature")
-        if room is not None and not value > room:
-            raise _error(f"must be > room_temperature = {_fmt(room)}")
-        return value
-
-
-class Fluid(_Material):
-    """Weakly compressible fluid, Tait EOS p = bulk_modulus ((rho/rho0)**gamma - 1)."""
-
-    model: Literal["fluid"]
-    density: Positive
-    bulk_modulus: Positive
-    gamma: Positive = 7.0
-    viscosity: NonNegative = 0.0
-    # None: the fluid takes any tension; a number: the pressure never falls below
-    # -tension_cutoff (0: no tension at all, a free surface cavitates instead).
-    tension_cutoff: NonNegative | None = None
-
-    def dilatational_wave_speed(self) -> float:
-        """sqrt(bulk_modulus * gamma / density): dp/drho of the Tait EOS at rest."""
-        return math.sqrt(self.bulk_modulus * self.gamma / self.density)
-
-
-class ArtificialViscosity(_Model):
-    """q = rho L_e (quadratic L_e D_kk^2 - linear a D_kk) in compression ([R] eq. 5.35):
-    von Neumann-Richtmyer's quadratic and Landshoff's linear term; 0 and 0 turn it off.
-    The defaults are the usual bulk viscosity of explicit codes (1.5^2 and 0.06)."""
-
-    quadratic: NonNegative = 2.25
-    linear: NonNegative = 0.06
-
-
-class IdealGas(_Material):
-    """Ideal gas; each body gives its initial density and pressure."""
-
-    model: Literal["ideal_gas"]
-    gamma: Annotated[float, Strict(), Field(gt=1)] = 1.4
-    artificial_viscosity: ArtificialViscosity = Field(default_factory=ArtificialViscosity)
-
-    def sound_speed(self, density: float, pressure: float) -> float:
-        """sqrt(gamma p / rho); the wave speed depends on the body's state."""
-        return math.sqrt(self.gamma * pressure / density)
-
-
-class Rigid(_Material):
-    """Particles follow the body's prescribed ``velocity``; no waves travel in it."""
-
-    model: Literal["rigid"]
-    density: Positive
-
-
-Material = Annotated[
-    Union[LinearElastic, NeoHookean, J2Plasticity, JohnsonCook, Fluid, IdealGas, Rigid],
-    Field(discriminator="model"),
-]
+def __getattr__(name: str) -> type:
+    """The registered materials' schema classes by name (solver.scene.NeoHookean, ...):
+    they are declared in solver/materials/ and were defined here before the registry."""
+    for material in material_registry.REGISTRY.values():
+        if material.schema.__name__ == name:
+            return material.schema
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 # --------------------------------------------------------------------------- geometry
 
-class _Geometry(_Model):
+class _Geometry(SceneModel):
     @field_validator("type", check_fields=False)
     @classmethod
     def _type_supported(cls, value: str) -> str:
-        return _require_supported(value, "GEOMETRIES")
+        return require_supported(value, "GEOMETRIES")
 
     def shape(self) -> geometry_shapes.Geometry:
         """The inside-test object of ``solver.geometry``."""
@@ -454,7 +294,7 @@ for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
 
 # --------------------------------------------------------------------------- bodies, conditions
 
-class Body(_Model):
+class Body(SceneModel):
     name: Annotated[str, Field(min_length=1)]
     material: str
     geometry: GeometrySpec
@@ -466,7 +306,7 @@ class Body(_Model):
     velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
 
 
-class VelocityCondition(_Model):
+class VelocityCondition(SceneModel):
     """Grid nodes inside ``where`` get the given components; None leaves one free."""
 
     type: Literal["velocity"]
@@ -476,10 +316,10 @@ class VelocityCondition(_Model):
     @field_validator("type")
     @classmethod
     def _type_supported(cls, value: str) -> str:
-        return _require_supported(value, "BOUNDARY_CONDITIONS")
+        return require_supported(value, "BOUNDARY_CONDITIONS")
 
 
-class WallCondition(_Model):
+class WallCondition(SceneModel):
     type: Literal["wall"]
     face: Literal["x-", "x+", "y-", "y+", "z-", "z+"]
     mode: Literal["stick", "slip", "friction"]
@@ -488,19 +328,19 @@ class WallCondition(_Model):
     @field_validator("type")
     @classmethod
     def _type_supported(cls, value: str) -> str:
-        return _require_supported(value, "BOUNDARY_CONDITIONS")
+        return require_supported(value, "BOUNDARY_CONDITIONS")
 
     @field_validator("mode")
     @classmethod
     def _mode_supported(cls, value: str) -> str:
-        return _require_supported(value, "WALL_MODES")
+        return require_supported(value, "WALL_MODES")
 
     @model_validator(mode="after")
     def _friction_with_mode(self) -> "WallCondition":
         if self.mode == "friction" and self.friction is None:
-            raise _problems([("friction", "required with mode 'friction'")])
+            raise problems_at([("friction", "required with mode 'friction'")])
         if self.mode != "friction" and self.friction is not None:
-            raise _problems([("friction", "only used with mode 'friction'")])
+            raise problems_at([("friction", "only used with mode 'friction'")])
         return self
 
 
@@ -509,7 +349,7 @@ BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition], Field(dis
 
 # --------------------------------------------------------------------------- time, output
 
-class Time(_Model):
+class Time(SceneModel):
     end: Positive
     dt: Positive | None = None  # None: adaptive, dt = cfl * h / max(c + |v|)
     cfl: Annotated[float, Strict(), Field(gt=0, le=1)] = 0.5
@@ -526,7 +366,7 @@ class Time(_Model):
     def _steps_within_guard(self) -> "Time":
         steps = self.fixed_steps()
         if steps is not None and steps > self.max_steps:
-            raise _problems([("dt", f"end / dt = {steps} steps, more than max_steps = {self.max_steps}")])
+            raise problems_at([("dt", f"end / dt = {steps} steps, more than max_steps = {self.max_steps}")])
         return self
 
 
@@ -540,7 +380,7 @@ def _known_output_field(name: str) -> str | None:
     return None
 
 
-class Preview(_Model):
+class Preview(SceneModel):
     field: str = "velocity_magnitude"
 
     @field_validator("field")
@@ -548,11 +388,11 @@ class Preview(_Model):
     def _field_known(cls, value: str) -> str:
         reason = _known_output_field(value)
         if reason:
-            raise _error(reason)
+            raise scene_error(reason)
         return value
 
 
-class Checkpoint(_Model):
+class Checkpoint(SceneModel):
     """Restart checkpoints (solver/checkpoint.py): every N steps and/or M seconds of wall time."""
     every_steps: Annotated[int, Strict(), Field(ge=1)] | None = None
     every_seconds: Positive | None = None
@@ -560,11 +400,11 @@ class Checkpoint(_Model):
     @model_validator(mode="after")
     def _one_given(self) -> "Checkpoint":
         if self.every_steps is None and self.every_seconds is None:
-            raise _error("give every_steps, every_seconds or both")
+            raise scene_error("give every_steps, every_seconds or both")
         return self
 
 
-class Output(_Model):
+class Output(SceneModel):
     frames: Annotated[int, Strict(), Field(ge=2)] = 51  # first and last included
     fields: list[str] = Field(default_factory=lambda: ["position", "velocity", "stress"])
     energies: Energies = True  # or N: every N steps
@@ -582,11 +422,11 @@ class Output(_Model):
             elif name in fields[:i]:
                 problems.append((f"[{i}]", f"{name!r} is listed twice"))
         if problems:
-            raise _problems(problems)
+            raise problems_at(problems)
         return fields
 
 
-class Parallel(_Model):
+class Parallel(SceneModel):
     processes: Annotated[int, Strict(), Field(ge=1)] = 1  # a request; the service may cap it
     # slabs are balanced by particle counts at the start and every N steps; 0: even slabs, never moved
     rebalance_every: Annotated[int, Strict(), Field(ge=0)] = 100
@@ -597,13 +437,13 @@ class Parallel(_Model):
     @classmethod
     def _processes_supported(cls, value: int) -> int:
         if value > capabilities.MAX_PROCESSES:
-            raise _error(f"{value} processes is not supported yet (at most {capabilities.MAX_PROCESSES})")
+            raise scene_error(f"{value} processes is not supported yet (at most {capabilities.MAX_PROCESSES})")
         return value
 
 
 # --------------------------------------------------------------------------- the scene
 
-class Scene(_Model):
+class Scene(SceneModel):
     version: Literal[1] = 1
     name: str = "untitled"
     dimension: Literal[1, 2, 3]
@@ -623,16 +463,16 @@ class Scene(_Model):
     @classmethod
     def _axisymmetric_in_2d(cls, value: bool, info: ValidationInfo) -> bool:
         if value and info.data.get("dimension", 2) != 2:
-            raise _error("only possible with dimension 2 (x = r, y = z)")
+            raise scene_error("only possible with dimension 2 (x = r, y = z)")
         if value and not capabilities.AXISYMMETRIC:
-            raise _error("axisymmetric scenes are not supported yet")
+            raise scene_error("axisymmetric scenes are not supported yet")
         return value
 
     @model_validator(mode="after")
     def _consistent(self) -> "Scene":
         problems = _cross_checks(self)
         if problems:
-            raise _problems(problems)
+            raise problems_at(problems)
         return self
 
     # Grid helpers for the solver. The number of cells per axis is
@@ -657,7 +497,7 @@ class Scene(_Model):
             upper = self._bodies_box()[1] + 2 * np.array(self.cell_sizes())
         cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
         cells = [max(1, math.ceil(n - 1e-9)) for n in cells]
-        if self.method.shape_function == "bernstein":   # its elements span two cells
+        if shape_functions.REGISTRY[self.method.shape_function].even_cells:   # elements of two cells (bernstein)
             cells = [n + n % 2 for n in cells]
         return tuple(cells)
 
@@ -667,6 +507,18 @@ class Scene(_Model):
     def _bodies_box(self) -> tuple[np.ndarray, np.ndarray]:
         boxes = [body.geometry.shape().bounding_box() for body in self.bodies]
         return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+
+
+def _rebuild_material_union() -> None:
+    """A material was registered or removed: the scene validates (and its JSON schema
+    describes) the registered ones from now on."""
+    global Material
+    Material = _material_union()
+    Scene.model_fields["materials"].annotation = dict[str, Material]
+    Scene.model_rebuild(force=True)
+
+
+material_registry.on_change(_rebuild_material_union)
 
 
 # --------------------------------------------------------------------------- cross checks
@@ -792,25 +644,29 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
 
 def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
     """Grids too small for a function's stencil; bodies too close to the grid ends
-    for quadratic B-splines (no boundary-modified variant: a particle within h/2 of
-    a grid end would need a node beyond it)."""
+    for functions without a boundary-modified variant (quadratic B-splines: a
+    particle within h/2 of a grid end would need a node beyond it)."""
     name = scene.method.shape_function
-    least = {"cubic_bspline": 3, "quadratic_bspline": 2, "gimp": 2, "cpgimp": 2}.get(name)
-    if least is not None and min(scene.grid_shape()) < least:
-        return [("grid.cell_size", f"{name!r} needs at least {least} cells per axis, "
+    declared = shape_functions.REGISTRY[name]
+    if min(scene.grid_shape()) < declared.least_cells:
+        return [("grid.cell_size", f"{name!r} needs at least {declared.least_cells} cells per axis, "
                                    f"the grid has {list(scene.grid_shape())}")]
-    if name != "quadratic_bspline":
+    if not declared.end_margin:
         return []
     problems = []
-    half = 0.5 * np.array(scene.cell_sizes())
+    margin = declared.end_margin * np.array(scene.cell_sizes())
     grid_lower, grid_upper = np.array(scene.grid_lower()), np.array(scene.grid_upper())
     for i, body in enumerate(scene.bodies):
         lower, upper = body.geometry.shape().bounding_box()
-        if np.any(lower < grid_lower + half - 1e-9 * half) or np.any(upper > grid_upper - half + 1e-9 * half):
-            problems.append((f"bodies[{i}].geometry", "with 'quadratic_bspline' a body must keep half a cell "
+        if np.any(lower < grid_lower + margin - 1e-9 * margin) or np.any(upper > grid_upper - margin + 1e-9 * margin):
+            problems.append((f"bodies[{i}].geometry", f"with {name!r} a body must keep {_cells(declared.end_margin)} "
                                                       "from the grid ends (its particles would need nodes "
                                                       "beyond the grid); enlarge the grid"))
     return problems
+
+
+def _cells(count: float) -> str:
+    return "half a cell" if count == 0.5 else f"{fmt(count)} cells"
 
 
 def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:
@@ -822,8 +678,8 @@ def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:
     tolerance = 1e-9 * max(scene.cell_sizes())
     if np.all(lower >= grid_lower - tolerance) and np.all(upper <= grid_upper + tolerance):
         return []
-    box = " x ".join(f"[{_fmt(lo)}, {_fmt(up)}]" for lo, up in zip(lower, upper))
-    grid = " x ".join(f"[{_fmt(lo)}, {_fmt(up)}]" for lo, up in zip(grid_lower, grid_upper))
+    box = " x ".join(f"[{fmt(lo)}, {fmt(up)}]" for lo, up in zip(lower, upper))
+    grid = " x ".join(f"[{fmt(lo)}, {fmt(up)}]" for lo, up in zip(grid_lower, grid_upper))
     return [(path, f"the body (bounding box {box}) extends outside the grid {grid}")]
 
 
@@ -943,7 +799,7 @@ def _message(error: dict) -> str:
     kind = error["type"]
     if kind in _COMPARISON_MESSAGES:
         key, symbol = _COMPARISON_MESSAGES[kind]
-        return f"must be {symbol} {_fmt(error['ctx'][key])}"
+        return f"must be {symbol} {fmt(error['ctx'][key])}"
     if kind == "missing":
         return "required"
     if kind == "too_short":

@@ -13,12 +13,10 @@ import math
 import numpy as np
 from pydantic import BaseModel, Field
 
+from solver import shape as shape_functions
 from solver.expressions import compile_expression
-from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, IdealGas, Scene
+from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, Scene
 from solver.seeding import count_particles
-
-# Grid nodes per axis that one particle touches, per shape function.
-SUPPORT_NODES = {"linear": 2, "gimp": 3, "cpgimp": 3, "quadratic_bspline": 3, "bernstein": 3, "cubic_bspline": 4}
 
 # Assumed solver throughput in particle-steps per second (one process): a rough
 # figure for the order of magnitude of the run time, not a measurement.
@@ -82,17 +80,14 @@ def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
     gradients of the nodes it touches and their indices; 4 bytes for the body
     index. Per node: mass, two momenta and force (dim each)."""
     dim = scene.dimension
-    touched = SUPPORT_NODES[scene.method.shape_function] ** dim
+    touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
     per_particle = 8 * (2 * dim + 2 * dim * dim + 9 + 4 + 1 + touched * (1 + dim) + touched) + 4
     per_node = 8 * (1 + 3 * dim)
     return particles * per_particle + nodes * per_node
 
 
 def _wave_speed(scene: Scene, body: Body) -> float:
-    material = scene.materials[body.material]
-    if isinstance(material, IdealGas):
-        return material.sound_speed(body.initial_density, body.initial_pressure)
-    return material.dilatational_wave_speed() or 0.0
+    return scene.materials[body.material].initial_wave_speed(body)
 
 
 def _largest_speed(scene: Scene, body: Body) -> float:

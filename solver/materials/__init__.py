@@ -1,15 +1,24 @@
 """Constitutive models, registered by the scene's `model` name.
 
-A material turns the kinematics of its particles (L, F, volume) into Cauchy
-stress. Each model is one module with a class offering:
+A material is declared in one module, solver/materials/<name>.py (numba-free:
+the scene schema imports it): a `MaterialType` with the pydantic model of its
+scene entry (keys, validation, wave speed), its per-particle state (what it
+starts at, which of it is an output field) and its solver class, named as
+"module:Class" in solver/materials/kernels/ when it has numba kernels. The
+scene's `materials` union, `capabilities.MATERIAL_MODELS` and the output fields
+are built from the registry, so a material from elsewhere is one
+`register(MaterialType(...))` (`registered(...)` for the length of a block).
+
+The solver class turns the kinematics of its particles (L, F, volume) into
+Cauchy stress:
 
     Model(config, dimension)             config: the scene's material entry
     .wave_speed                          dilatational wave speed for the time step
     .update_stress(particles, sl, dt)    sl: slice of the particles made of it
     .particle_strain_energy(particles, sl)  stored energy of each of those particles
-    .init_particles(particles, sl, scene)   optional: allocate the per-particle state the
-                                         model needs (particles.require) and set it from
-                                         the bodies (a gas's e and p, a temperature)
+    .strain_energy(particles, sl)        their sum
+    .init_particles(particles, sl, scene)   optional: set what else the model needs
+                                         from the bodies (a gas's initial stress)
 
 `wave_speed` may change as the state does (a gas's sound speed, an EOS stiffening
 under compression): the time step reads its current value.
@@ -18,36 +27,28 @@ Particles are sorted by material, so each model works on one contiguous slice.
 """
 from __future__ import annotations
 
-from solver.materials.fluid import Fluid
-from solver.materials.ideal_gas import IdealGas
-from solver.materials.j2_plasticity import J2Plasticity
-from solver.materials.johnson_cook import JohnsonCook
-from solver.materials.linear_elastic import LinearElastic
-from solver.materials.neo_hookean import NeoHookean
-from solver.materials.rigid import Rigid
+from importlib import import_module
 
-REGISTRY = {
-    "linear_elastic": LinearElastic,
-    "neo_hookean": NeoHookean,
-    "fluid": Fluid,
-    "ideal_gas": IdealGas,
-    "rigid": Rigid,
-    "j2_plasticity": J2Plasticity,
-    "johnson_cook": JohnsonCook,
-}
+from solver.materials.registry import (
+    REGISTRY,
+    MaterialType,
+    StateVariable,
+    create,
+    init_particles,
+    names,
+    on_change,
+    output_fields,
+    register,
+    registered,
+    unregister,
+)
 
+__all__ = ["REGISTRY", "MaterialType", "StateVariable", "create", "init_particles", "names", "on_change",
+           "output_fields", "register", "registered", "unregister", "BUILTIN"]
 
-def create(config, dimension: int):
-    try:
-        model = REGISTRY[config.model]
-    except KeyError:
-        raise ValueError(f"material model {config.model!r} is not implemented; known: {sorted(REGISTRY)}") from None
-    return model(config, dimension)
+# The materials of this package, in the order the scene's union lists them
+# (error messages name the models in this order).
+BUILTIN = ("linear_elastic", "neo_hookean", "j2_plasticity", "johnson_cook", "fluid", "ideal_gas", "rigid")
 
-
-def init_particles(models, particles, scene) -> None:
-    """Let each model allocate and set the per-particle state it needs."""
-    for model, sl in models:
-        init = getattr(model, "init_particles", None)
-        if init is not None:
-            init(particles, sl, scene)
+for _name in BUILTIN:
+    register(import_module(f"solver.materials.{_name}").MATERIAL)

@@ -1,69 +1,20 @@
-"""Small-strain J2 plasticity with linear isotropic hardening (review C.4, Simo & Hughes 3.3).
+"""The `j2_plasticity` material: small-strain J2 plasticity with linear isotropic
+hardening (review C.4; the return mapping is solver/materials/kernels/j2_plasticity.py)."""
 
-Hypoelastic, objective through the Jaumann rate (solver/materials/objective.py):
+from typing import Literal
 
-    sigma_trial = Q sigma Q^T + lambda tr(de) I + 2 mu de,       de = D dt
-    q_trial = sqrt(3/2 s_trial : s_trial),  sigma_y = yield_stress + H eps_p
-    if q_trial > sigma_y:   d eps_p = (q_trial - sigma_y) / (3 mu + H)
-                            s <- s_trial (sigma_y + H d eps_p) / q_trial
-
-The radial return is exact for proportional (radial) loading with linear
-hardening: in uniaxial stress the curve is E up to yield_stress, then
-E_t = E H / (E + H). Per particle it keeps the equivalent plastic strain
-(`plastic_strain`). The stored (elastic) energy is sigma : C^-1 : sigma / 2.
-"""
-from __future__ import annotations
-
-import numba
-import numpy as np
-from numba import njit, prange
-
-from solver.materials import objective
-from solver.materials.linear_elastic import LinearElastic
-from solver.threads import block_bounds
+from solver.materials.registry import MaterialType, StateVariable
+from solver.schema import ElasticMaterial, NonNegative, Positive
 
 
-@njit(parallel=True, cache=True)
-def _update(L, stress, eps_p, dt, K, G, yield_stress, H, threads):
-    bounds = block_bounds(L.shape[0], threads)
-    for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, dt, K, G, yield_stress, H)
+class J2Plasticity(ElasticMaterial):
+    model: Literal["j2_plasticity"]
+    yield_stress: Positive
+    hardening_modulus: NonNegative = 0.0  # 0: perfectly plastic
 
 
-@njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, dt, K, G, yield_stress, H):
-    # scratch per block, in this serial function: never shared between threads (nor in one cache line)
-    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    for p in range(lo, hi):
-        objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt, Q, tmp)
-        pressure = objective.split(stress[p], s)
-        tr = objective.add_deviatoric_rate(s, D, 2.0 * G * dt)
-        pressure -= K * tr * dt
-        q = objective.von_mises(s)
-        sigma_y = yield_stress + H * eps_p[p]
-        if q > sigma_y:
-            d_eps = (q - sigma_y) / (3.0 * G + H)
-            eps_p[p] += d_eps
-            scale = (sigma_y + H * d_eps) / q
-            for a in range(3):
-                for b in range(3):
-                    s[a, b] *= scale
-        objective.assemble(s, pressure, stress[p])
-
-
-class J2Plasticity(LinearElastic):
-    """Linear elastic inside the yield surface: the stored energy is LinearElastic's."""
-
-    def __init__(self, config, dimension: int):
-        super().__init__(config, dimension)
-        self.bulk = self.lam + 2.0 * self.mu / 3.0
-        self.yield_stress = config.yield_stress
-        self.hardening = config.hardening_modulus
-
-    def init_particles(self, particles, sl: slice, scene) -> None:
-        particles.require("plastic_strain")
-
-    def update_stress(self, particles, sl: slice, dt: float) -> None:
-        _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
-                dt, self.bulk, self.mu, self.yield_stress, self.hardening, numba.get_num_threads())
+MATERIAL = MaterialType(
+    schema=J2Plasticity,
+    solver_class="solver.materials.kernels.j2_plasticity:J2Plasticity",
+    state=(StateVariable("plastic_strain", output=True),),   # equivalent plastic strain
+)

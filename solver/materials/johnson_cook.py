@@ -1,235 +1,96 @@
-"""Hypoelastic-plastic Johnson-Cook model with an EOS, damage and adiabatic heating
-(Karamelo paper 2.4.2, eq. 2.8-2.16; review Appendix B.3, Algorithms 11-13).
-
-Per particle and step (stress sigma = s - p I, p positive in compression):
-
-1. objective rate: s <- Q s Q^T, the Hughes-Winget integration of the Jaumann
-   rate (solver/materials/objective.py; the review's polar decomposition is the
-   alternative it names);
-2. elastic trial deviator: s_trial = s + 2 G' dt dev(D), G' = (1 - D) G;
-3. radial return (Leroch et al., review Algorithm 12) on the flow stress
-       sigma_f = (A + B eps_p^n) (1 + C ln(max(eps_dot_p / eps_dot_0, 1))) (1 - T*^m) (1 - D),
-       T* = (T - T_room) / (T_melt - T_room) clamped to [0, 1],
-   with eps_p, T and D of the start of the step; if q_trial = sqrt(3/2 s:s) > sigma_f,
-   d eps_p solves q_trial - 3 G' d eps_p = sigma_f(eps_dot_p = d eps_p / dt) and
-   s <- s_trial sigma_f / q_trial. The rate is this step's plastic rate, solved for
-   (VERIFICATION_CASES F34 leaves it open): the previous step's rate, as Karamelo
-   uses, makes the return alternate between yielding twice as fast and not at all
-   once C ln(rate) is larger than the hardening of one step;
-4. adiabatic heating: dT = taylor_quinney sigma_f d eps_p / (rho c_p) (eq. 2.13);
-5. pressure from the EOS (solver/materials/eos.py) at rho = mass / volume and
-   e = rho0 c_p (T - T_room) (one specific heat serves as c_p and c_v); a tension
-   is scaled by (1 - D) (Karamelo's implementation; eq. 2.8 scales the compression
-   branch, which would let a broken material pass through itself);
-6. failure and damage (solver/materials/damage.py), updated after the stress as in
-   Algorithm 11: they act from the next step on, except failure, which drops the
-   deviator and any tension at once.
-
-Per-particle state: plastic_strain, plastic_strain_rate, temperature (the body's
-initial_temperature, else room_temperature), and damage (+ damage_init) only when
-the material has a damage model or a failure criterion.
-The stored energy is a function of the current state, the energy of the stress
-the particle carries: s:s / (4 G') per unit volume plus the work of the EOS's
-cold pressure to the current mu (eos.stored_energy), in tension times (1 - D) as
-the pressure is. A failed particle thus stores nothing once its debris expands
-(the EOS energy of its growing volume, K (J - 1 - ln J), would otherwise grow
-without bound and trip the runner's energy-growth check).
-"""
-from __future__ import annotations
+"""The `johnson_cook` material: hypoelastic-plastic Johnson-Cook flow stress with an
+equation of state, damage, failure and adiabatic heating (Karamelo 2.4.2, review
+B.3; the update is solver/materials/kernels/johnson_cook.py with kernels/eos.py
+and kernels/damage.py)."""
 
 import math
+from typing import Annotated, Literal, Union
 
-import numba
 import numpy as np
-from numba import njit, prange
+from pydantic import Field, Strict, ValidationInfo, field_validator
 
-from solver.materials import damage as damage_model
-from solver.materials import eos, objective
-from solver.materials.elastic import IsotropicElastic
-from solver.threads import block_bounds
-
-# Layout of the flow-stress parameter array.
-A, B, N, C, RATE0, M, T_ROOM, T_MELT, CHI, CP, RHO0 = range(11)
+from solver.materials.registry import MaterialType, StateVariable
+from solver.schema import ElasticMaterial, NonNegative, Positive, Real, SceneModel, fmt, scene_error
 
 
-@njit(cache=True)
-def homologous_temperature(prm, T):
-    t = (T - prm[T_ROOM]) / (prm[T_MELT] - prm[T_ROOM])
-    return min(max(t, 0.0), 1.0)
+class LinearEOS(SceneModel):
+    model: Literal["linear"]
 
 
-@njit(cache=True)
-def flow_stress(prm, eps_p, rate_ratio, t_star):
-    """Johnson-Cook flow stress without the damage factor."""
-    hardening = prm[A] + prm[B] * eps_p ** prm[N] if eps_p > 0.0 else prm[A]
-    rate = 1.0 + prm[C] * math.log(rate_ratio) if rate_ratio > 1.0 else 1.0
-    thermal = 1.0 - t_star ** prm[M] if t_star > 0.0 else 1.0   # (no pow at room temperature)
-    return hardening * rate * thermal
+class MieGruneisenEOS(SceneModel):
+    model: Literal["mie_gruneisen"]
+    c0: Positive  # bulk speed of sound
+    s: NonNegative  # slope of the linear Hugoniot
+    gamma0: NonNegative  # Grüneisen gamma of the reference state
 
 
-@njit(cache=True)
-def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor, guess):
-    """d eps_p of the radial return with the strain-rate term taken at this step's rate:
-
-        q_trial - 3 G' d = sigma_static (1 + C ln(max(d / rate_floor, 1))),  rate_floor = eps_dot_0 dt,
-
-    sigma_static the flow stress without its rate factor. The left side falls and
-    the right side rises with d, so the root is unique; safeguarded Newton finds it,
-    starting from `guess` (the last step's increment: in steady flow a step or two away).
-    """
-    d = (q_trial - sigma_static) / three_g           # the root without the rate term, an upper bound
-    if C == 0.0 or d <= rate_floor:
-        return d
-    lo, hi = rate_floor, d
-    x = guess if lo < guess < hi else d
-    for _ in range(60):
-        g = q_trial - three_g * x - sigma_static * (1.0 + C * math.log(x / rate_floor))
-        if g > 0.0:
-            lo = x
-        else:
-            hi = x
-        step = g / (three_g + sigma_static * C / x)
-        nxt = x + step
-        if not lo < nxt < hi:
-            nxt = 0.5 * (lo + hi)
-        if abs(nxt - x) <= 1e-13 * x:
-            return nxt
-        x = nxt
-    return x
+class JohnsonCookDamage(SceneModel):
+    model: Literal["johnson_cook"]
+    D1: Real
+    D2: Real
+    D3: Real
+    D4: Real
+    D5: Real
+    evolution_factor: Positive = 10.0  # D = k (D_init - 1): 10 in [K] eq. 2.16, 1 in [R] Alg. 13
 
 
-@njit(parallel=True, cache=True)
-def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm,
-            threads):
-    """Update the particles' stress and state; returns the largest wave speed (K_t + 4/3 G') / rho."""
-    bounds = block_bounds(L.shape[0], threads)
-    fastest = np.zeros(threads)
-    for t in prange(threads):
-        fastest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, mass, volume, eps_p, eps_rate, T, dmg,
-                                   d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm)
-    return math.sqrt(fastest.max())
+class Failure(SceneModel):
+    """MPM3DMP 5.3: a particle fails when either criterion given is met."""
+
+    plastic_strain: Positive | None = None  # equivalent plastic strain at failure
+    min_pressure: Annotated[float, Strict(), Field(lt=0)] | None = None  # failure pressure (a tension, < 0)
 
 
-@njit(cache=True)
-def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
-                  fail_prm):
-    # scratch per block, in this serial function: never shared between threads (nor in one cache line)
-    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    damaged = dmg.shape[0] > 0
-    accumulates = d_init.shape[0] > 0
-    fastest = 0.0
-    for p in range(lo, hi):
-        objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt, Q, tmp)
-        objective.split(stress[p], s)
-        d = dmg[p] if damaged else 0.0
-        g = (1.0 - d) * G
+class JohnsonCook(ElasticMaterial):
+    model: Literal["johnson_cook"]
+    A: Positive
+    B: NonNegative
+    n: NonNegative
+    C: NonNegative
+    reference_strain_rate: Positive
+    m: Positive
+    room_temperature: NonNegative
+    melt_temperature: Positive
+    specific_heat: Positive
+    taylor_quinney: Annotated[float, Strict(), Field(ge=0, le=1)]
+    eos: Annotated[Union[LinearEOS, MieGruneisenEOS], Field(discriminator="model")] = LinearEOS(model="linear")
+    damage: JohnsonCookDamage | None = None
+    failure: Failure | None = None
 
-        # deviator: elastic trial and radial return on the flow stress
-        objective.add_deviatoric_rate(s, D, 2.0 * g * dt)
-        q = objective.von_mises(s)
-        t_star = homologous_temperature(prm, T[p])
-        sigma_f = flow_stress(prm, eps_p[p], 1.0, t_star) * (1.0 - d)   # static: rate factor 1
-        d_eps = 0.0
-        if d >= 1.0:
-            s[:, :] = 0.0
-        elif q > sigma_f:
-            d_eps = plastic_increment(q, 3.0 * g, sigma_f, prm[C], prm[RATE0] * dt, eps_rate[p] * dt)
-            sigma_f = q - 3.0 * g * d_eps
-            s *= sigma_f / q
-        eps_p[p] += d_eps
-        eps_rate[p] = d_eps / dt
+    def dilatational_wave_speed(self) -> float:
+        """sqrt((K + 4/3 G) / rho) with the EOS bulk modulus (rho0 c0^2 for Mie-Gruneisen)."""
+        bulk = self.density * self.eos.c0**2 if self.eos.model == "mie_gruneisen" else self.bulk_modulus
+        return math.sqrt((bulk + 4 * self.shear_modulus / 3) / self.density)
 
-        # heat, then pressure
-        rho = mass[p] / volume[p]
-        T[p] += prm[CHI] * sigma_f * d_eps / (rho * prm[CP])
-        mu = rho / prm[RHO0] - 1.0
-        pressure = eos.pressure(eos_prm, mu, prm[RHO0] * prm[CP] * (T[p] - prm[T_ROOM]))
-        if pressure < 0.0:
-            pressure *= 1.0 - d
-
-        # failure at once; damage from the next step on
-        if damaged:
-            if damage_model.fails(fail_prm, eps_p[p], pressure):
-                dmg[p] = 1.0
-                s[:, :] = 0.0
-                pressure = max(pressure, 0.0)
-            elif accumulates:
-                d_init[p], d_new = damage_model.accumulate(
-                    dmg_prm, d_init[p], d_eps, pressure, objective.von_mises(s), eps_rate[p] / prm[RATE0], t_star)
-                dmg[p] = max(dmg[p], d_new)
-        objective.assemble(s, pressure, stress[p])
-
-        fastest = max(fastest, (eos.bulk_tangent(eos_prm, mu) + 4.0 / 3.0 * g) / rho)
-    return fastest   # squared: one square root for all particles
+    @field_validator("melt_temperature")
+    @classmethod
+    def _melt_above_room(cls, value: float, info: ValidationInfo) -> float:
+        room = info.data.get("room_temperature")
+        if room is not None and not value > room:
+            raise scene_error(f"must be > room_temperature = {fmt(room)}")
+        return value
 
 
-@njit(parallel=True, cache=True)
-def _energy(stress, mass, volume, dmg, G, rho0, eos_prm, out):
-    damaged = dmg.shape[0] > 0
-    for p in prange(stress.shape[0]):
-        d = dmg[p] if damaged else 0.0
-        g = (1.0 - d) * G
-        mean = (stress[p, 0, 0] + stress[p, 1, 1] + stress[p, 2, 2]) / 3.0
-        ss = 0.0   # s:s of the deviator s = sigma - mean I
-        for a in range(3):
-            for b in range(3):
-                sab = stress[p, a, b] - (mean if a == b else 0.0)
-                ss += sab * sab
-        mu = mass[p] / (volume[p] * rho0) - 1.0
-        shear = volume[p] * ss / (4.0 * g) if g > 0.0 else 0.0
-        volumetric = mass[p] / rho0 * eos.stored_energy(eos_prm, mu)
-        if mu < 0.0:   # tension carries (1 - D) of the EOS pressure: a failed particle stores nothing
-            volumetric *= 1.0 - d
-        out[p] = shear + volumetric
+def _initial_temperature(config: JohnsonCook, scene, body: np.ndarray) -> np.ndarray:
+    """The body's initial_temperature, else the material's room temperature."""
+    per_body = [config.room_temperature if b.initial_temperature is None else b.initial_temperature
+                for b in scene.bodies]
+    return np.array(per_body, dtype=np.float64)[body]
 
 
-class JohnsonCook(IsotropicElastic):
-    def __init__(self, config, dimension: int):
-        super().__init__(config, dimension)
-        self.config = config
-        self.flow = np.array([config.A, config.B, config.n, config.C, config.reference_strain_rate, config.m,
-                              config.room_temperature, config.melt_temperature, config.taylor_quinney,
-                              config.specific_heat, config.density])
-        self.eos = eos.parameters(config)
-        self.bulk = eos.reference_bulk(self.eos)
-        self.damage = damage_model.parameters(config.damage)
-        self.failure = damage_model.failure_parameters(config.failure)
-        self.reference_wave_speed = math.sqrt((self.bulk + 4.0 / 3.0 * self.mu) / self.density)
-        self.wave_speed = self.reference_wave_speed
+def _tracks_damage(config: JohnsonCook) -> bool:
+    return config.damage is not None or config.failure is not None
 
-    @property
-    def tracks_damage(self) -> bool:
-        return self.config.damage is not None or self.config.failure is not None
 
-    def init_particles(self, particles, sl: slice, scene) -> None:
-        particles.require("plastic_strain")
-        particles.require("plastic_strain_rate")
-        temperature = particles.require("temperature", fill=math.nan)[sl]
-        temperature[:] = self.config.room_temperature
-        for b, body in enumerate(scene.bodies):
-            if body.initial_temperature is not None:
-                temperature[particles.body[sl] == b] = body.initial_temperature
-        if self.tracks_damage:
-            particles.require("damage")
-        if self.config.damage is not None:
-            particles.require("damage_init")
-
-    def _optional(self, particles, name: str, sl: slice) -> np.ndarray:
-        return particles.extra[name][sl] if name in particles.extra else np.zeros(0)
-
-    def update_stress(self, particles, sl: slice, dt: float) -> None:
-        x = particles.extra
-        fastest = _update(particles.L[sl], particles.stress[sl],
-                          particles.mass[sl], particles.volume[sl], x["plastic_strain"][sl],
-                          x["plastic_strain_rate"][sl], x["temperature"][sl],
-                          self._optional(particles, "damage", sl), self._optional(particles, "damage_init", sl),
-                          dt, self.mu, self.flow, self.eos, self.damage, self.failure, numba.get_num_threads())
-        # The EOS stiffens under compression: the time step follows the current state.
-        self.wave_speed = max(self.reference_wave_speed, fastest)
-
-    def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
-        out = np.empty(sl.stop - sl.start)
-        _energy(particles.stress[sl], particles.mass[sl], particles.volume[sl],
-                self._optional(particles, "damage", sl), self.mu, self.density, self.eos, out)
-        return out
+MATERIAL = MaterialType(
+    schema=JohnsonCook,
+    solver_class="solver.materials.kernels.johnson_cook:JohnsonCook",
+    state=(
+        StateVariable("plastic_strain", output=True),
+        StateVariable("plastic_strain_rate"),    # the last step's, the guess of the rate-dependent return
+        # NaN where no model tracks a temperature
+        StateVariable("temperature", fill=math.nan, output=True, initial=_initial_temperature),
+        StateVariable("damage", output=True, when=_tracks_damage),   # 1: failed
+        StateVariable("damage_init", when=lambda config: config.damage is not None),   # D_init of the damage model
+    ),
+)

@@ -1,55 +1,14 @@
-"""Compressible neo-Hookean hyperelasticity (review B.2, eq. B.6-B.7).
+"""The `neo_hookean` material: compressible neo-Hookean hyperelasticity (review
+B.2; the stress update is solver/materials/kernels/neo_hookean.py)."""
 
-sigma = [mu (F F^T - I) + lambda ln J I] / J, with F padded to 3x3 (plane
-strain: F_zz = 1). Stored energy per reference volume:
-W = mu/2 (tr C - 3) - mu ln J + lambda/2 (ln J)^2.
-"""
-from __future__ import annotations
+from typing import Literal
 
-import math
-
-import numpy as np
-from numba import njit, prange
-
-from solver.kernels import determinant
-from solver.materials.elastic import IsotropicElastic
+from solver.materials.registry import MaterialType
+from solver.schema import ElasticMaterial
 
 
-@njit(parallel=True, cache=True)
-def _update(F, stress, lam, mu):
-    n, dim = F.shape[0], F.shape[1]
-    for p in prange(n):
-        J = determinant(F[p])
-        c = lam * math.log(J) / J
-        for a in range(3):
-            for b in range(3):
-                bab = 0.0   # (F F^T)_ab of the padded F
-                if a < dim and b < dim:
-                    for k in range(dim):
-                        bab += F[p, a, k] * F[p, b, k]
-                elif a == b:
-                    bab = 1.0
-                stress[p, a, b] = mu / J * (bab - (1.0 if a == b else 0.0)) + (c if a == b else 0.0)
+class NeoHookean(ElasticMaterial):
+    model: Literal["neo_hookean"]
 
 
-@njit(cache=True)
-def _energy(F, volume0, lam, mu, out):
-    n, dim = F.shape[0], F.shape[1]
-    for p in range(n):
-        J = determinant(F[p])
-        trC = 3.0 - dim
-        for a in range(dim):
-            for b in range(dim):
-                trC += F[p, a, b] * F[p, a, b]
-        lnJ = math.log(J)
-        out[p] = volume0[p] * (0.5 * mu * (trC - 3.0) - mu * lnJ + 0.5 * lam * lnJ * lnJ)
-
-
-class NeoHookean(IsotropicElastic):
-    def update_stress(self, particles, sl: slice, dt: float) -> None:
-        _update(particles.F[sl], particles.stress[sl], self.lam, self.mu)
-
-    def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
-        out = np.empty(sl.stop - sl.start)
-        _energy(particles.F[sl], particles.volume0[sl], self.lam, self.mu, out)
-        return out
+MATERIAL = MaterialType(schema=NeoHookean, solver_class="solver.materials.kernels.neo_hookean:NeoHookean")

@@ -1,24 +1,17 @@
-"""The `rigid` material: particles that only carry a prescribed velocity (solver/rigid.py).
+"""The `rigid` material: particles that follow their body's prescribed velocity
+(solver/rigid.py; its solver object is solver/materials/kernels/rigid.py)."""
 
-It has no stress and stores no energy; no wave travels through it, so it does
-not limit the time step (its speed does, through the particles' velocities).
-"""
-from __future__ import annotations
+from typing import Literal
 
-import numpy as np
+from solver.materials.registry import MaterialType
+from solver.schema import BaseMaterial, Positive
 
 
-class Rigid:
-    wave_speed = 0.0
+class Rigid(BaseMaterial):
+    """Particles follow the body's prescribed ``velocity``; no waves travel in it."""
 
-    def __init__(self, config, dimension: int):
-        self.density = config.density
+    model: Literal["rigid"]
+    density: Positive
 
-    def update_stress(self, particles, sl: slice, dt: float) -> None:
-        pass
 
-    def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
-        return np.zeros(sl.stop - sl.start)
-
-    def strain_energy(self, particles, sl: slice) -> float:
-        return 0.0
+MATERIAL = MaterialType(schema=Rigid, solver_class="solver.materials.kernels.rigid:Rigid")

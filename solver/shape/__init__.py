@@ -1,7 +1,13 @@
 """Shape (weighting) functions, registered by name.
 
-A shape function module provides `SUPPORT` (nodes per axis that a particle
-touches) and a numba kernel
+A shape function is declared in solver/shape/<module>.py: a `ShapeFunction`
+(solver/shape/registry.py) with its name, `support` (SUPPORT: nodes per axis
+that a particle touches), APIC constant, the formulations and transfers it
+allows and what it needs of the grid. `REGISTRY` maps the names to these
+declarations; the scene's `shape_function` values, `capabilities.SHAPE_FUNCTIONS`
+and the summary's memory estimate are built from it, and none of it loads numba.
+`get(name)` imports the kernel module it names (solver/shape/kernels/), which
+provides a numba kernel
 
     weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks) -> int
 
@@ -24,44 +30,41 @@ A function that needs per-particle data (GIMP's particle sizes) also provides
 `evaluate(spec, x, particles, grid, stencil, blocks)`, which calls its kernel with it.
 Callers use the module-level `prepare` and `evaluate` below, which fall back to
 the plain kernel.
-
-| name | SUPPORT | module |
-|---|---|---|
-| linear | 2 | hat functions |
-| gimp | 3 | uGIMP |
-| cpgimp | 3 | cpGIMP (GIMP boxes stretched by diag F) |
-| quadratic_bspline | 3 | quadratic B-splines |
-| cubic_bspline | 4 | cubic B-splines, boundary-modified |
-| bernstein | 3 | quadratic Bernstein, elements of two cells (TLMPM only) |
 """
 from __future__ import annotations
 
-from types import ModuleType, SimpleNamespace
+from importlib import import_module
+from types import SimpleNamespace
 
-import numba
 import numpy as np
 
-from solver.shape import bernstein, cubic_bspline, gimp, linear, quadratic_bspline
+from solver.shape.registry import ShapeFunction
 
-# cpGIMP is GIMP with boxes that follow the stretch: the same kernel, another evaluate.
-_cpgimp = SimpleNamespace(__name__="solver.shape.cpgimp", SUPPORT=gimp.SUPPORT, weights=gimp.weights,
-                          prepare=gimp.prepare, evaluate=gimp.evaluate_contiguous)
+__all__ = ["BUILTIN", "REGISTRY", "ShapeFunction", "evaluate", "get", "prepare"]
 
-REGISTRY: dict[str, ModuleType | SimpleNamespace] = {
-    "linear": linear,
-    "gimp": gimp,
-    "cpgimp": _cpgimp,
-    "quadratic_bspline": quadratic_bspline,
-    "cubic_bspline": cubic_bspline,
-    "bernstein": bernstein,
+# The declaration modules, in the order the scene lists the names (its error
+# messages and JSON schema enumerate them in this order).
+BUILTIN = ("linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein")
+
+REGISTRY: dict[str, ShapeFunction] = {
+    declared.name: declared
+    for module in BUILTIN
+    for declared in import_module(f"solver.shape.{module}").SHAPE_FUNCTIONS
 }
 
 
-def get(name: str) -> ModuleType:
+def get(name: str) -> SimpleNamespace:
+    """The kernels of shape function `name`: SUPPORT, weights, and prepare and evaluate
+    where it has them (imported now: this loads numba)."""
     try:
-        return REGISTRY[name]
+        declared = REGISTRY[name]
     except KeyError:
         raise ValueError(f"shape function {name!r} is not implemented; known: {sorted(REGISTRY)}") from None
+    module = import_module(declared.kernels)
+    functions = {"weights": module.weights, "prepare": getattr(module, "prepare", None),
+                 "evaluate": getattr(module, declared.evaluate, None)}
+    return SimpleNamespace(__name__=f"{module.__name__}:{name}", SUPPORT=declared.support,
+                           **{key: f for key, f in functions.items() if f is not None})
 
 
 def prepare(module, scene, particles) -> None:
@@ -74,6 +77,8 @@ def evaluate(module, spec, x: np.ndarray, particles, grid, stencil) -> int:
     """Weights and gradients at positions x (the particles' current or reference
     positions) into the stencil; the first particle outside the grid, or -1.
     One block of particles per thread of this process (set by threads.configure)."""
+    import numba   # here: the declarations above load with the scene, which must not load numba
+
     blocks = numba.get_num_threads()
     if hasattr(module, "evaluate"):
         return module.evaluate(spec, x, particles, grid, stencil, blocks)

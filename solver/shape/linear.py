@@ -1,31 +1,14 @@
-"""Linear hat functions (review eq. 3.1-3.3, Karamelo eq. 2.1-2.4).
+"""Linear hat functions (review eq. 3.1-3.3; kernel: solver/shape/kernels/linear.py)."""
 
-In 1D N_I(x) = 1 - |x - x_I| / h on the two nodes of the cell holding x; in 2D
-and 3D the tensor product over axes. Their gradient jumps at cell faces, which
-is the cell-crossing noise of standard MPM (review 3.2).
-"""
-from __future__ import annotations
+from solver.shape.registry import ShapeFunction
 
-from numba import njit
-
-from solver.shape import tensor
-
-SUPPORT = 2  # nodes per axis
-
-
-@njit(cache=True)
-def axis(s, a, p, cells, inv_h, data, w1, g1):
-    """The two nodes of the cell holding s (in cells) along axis a (solver/shape/tensor.py)."""
-    if not (s >= 0.0 and s <= cells):   # also catches NaN
-        return -1
-    i = min(int(s), cells - 1)
-    f = s - i
-    w1[a, 0] = 1.0 - f
-    w1[a, 1] = f
-    g1[a, 0] = -inv_h
-    g1[a, 1] = inv_h
-    return i
-
-
-def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    return tensor.weights(axis, tensor.support(SUPPORT), spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)
+SHAPE_FUNCTIONS = (
+    ShapeFunction(
+        name="linear", support=2, kernels="solver.shape.kernels.linear",
+        # see solver/transfer.py: C_p = sum v~_I grad w^T is unbounded on nearly empty nodes
+        apic=False,
+        apic_refusal="'apic' does not work with 'linear' hat functions: the affine matrix takes the unbounded "
+                     "accelerations of nearly empty nodes, whose hat gradients do not vanish, and the run blows up; "
+                     "use gimp, quadratic_bspline or cubic_bspline",
+    ),
+)

@@ -15,6 +15,8 @@ cell face are avoided for them).
 """
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -226,5 +228,31 @@ def test_gimp_matches_the_printed_pieces():
 def test_support_sizes(name):
     """Nodes per axis: 2 (hats), 3 (GIMP with l_p <= h, quadratic B-splines and
     Bernstein), 4 (cubic B-splines); summary.py budgets memory with the same."""
-    from solver.summary import SUPPORT_NODES
-    assert shape.get(name).SUPPORT == {"linear": 2, "cubic_bspline": 4}.get(name, 3) == SUPPORT_NODES[name]
+    assert shape.get(name).SUPPORT == {"linear": 2, "cubic_bspline": 4}.get(name, 3) == shape.REGISTRY[name].support
+
+
+def test_the_summary_budgets_the_registered_support(monkeypatch):
+    """summary.memory_bytes reads the support from the registry: 8 bytes per weight,
+    per index and per gradient component of each node a particle touches."""
+    from solver.scene import load_scene
+    from solver.summary import memory_bytes
+
+    scene = load_scene(Path(__file__).parents[2] / "examples" / "two_disks.json")   # 2D, linear
+    before = memory_bytes(scene, 100, 10)
+    monkeypatch.setitem(shape.REGISTRY, "linear", replace(shape.REGISTRY["linear"], support=5))
+    touched_more = 5**2 - 2**2
+    assert memory_bytes(scene, 100, 10) - before == 100 * 8 * touched_more * (2 + scene.dimension)
+
+
+@pytest.mark.parametrize("name", [name for name in ALL if shape.REGISTRY[name].apic_d is not None])
+def test_the_declared_apic_constant_is_the_inertia_of_the_weights(name):
+    """D_p = sum_I w_Ip (x_I - x_p)(x_I - x_p)^T = c h^2 I (eq. 5.38) at every position,
+    c = APIC_D: exact in exact arithmetic, so to round-off of the O(h^2) sums."""
+    rng = np.random.default_rng(3)
+    grid = make_grid(2)
+    x = random_points(name, grid, 200, rng)
+    _, s = evaluate(name, x, grid)
+    offsets = grid.node_positions()[s.idx] - x[:, None, :]
+    inertia = np.einsum("pk,pka,pkb->pab", s.w, offsets, offsets)
+    expected = shape.REGISTRY[name].apic_d * np.diag(grid.h**2)
+    np.testing.assert_allclose(inertia, np.broadcast_to(expected, inertia.shape), atol=1e-12 * np.max(grid.h) ** 2)

@@ -9,7 +9,7 @@ motion, where [R] Fig. 75 compares the deformed ring with the analytic map.
 [R] Fig. 74 reports order 2 at the coarse meshes, falling off as h decreases
 until the error plateaus; VERIFICATION_CASES E7 suggests a local slope of at
 least 1.5 over the first refinements, the issue 1.8. h here is the cell size,
-half a Bernstein element (solver/shape/bernstein.py); 0.1 and 0.05 are the two
+half a Bernstein element (solver/shape/kernels/bernstein.py); 0.1 and 0.05 are the two
 coarsest levels on which the ring is resolved (at 0.2, 2.5 cells across it, a
 particle inverts). Pure FLIP as in [R] §6 by default: with the blend 0.99 the PIC
 share damps the motion a little every step, and the vortex takes 8 times more

@@ -5,11 +5,11 @@ Exact properties of the linear hat functions and of P2G, checked to round-off.
 import numpy as np
 import pytest
 
-from solver import kernels
-from solver.shape import linear
+from solver import kernels, shape
 from solver.threads import ScatterCopies
 
 ROUND_OFF = 1e-12
+linear = shape.get("linear")
 
 
 def no_copies(n_nodes: int, dim: int) -> tuple:

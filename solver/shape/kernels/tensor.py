@@ -24,6 +24,12 @@ NO_DATA = np.zeros((0, 0))   # `data` of the functions that need none
 _SUPPORTS = {n: np.empty((0,) * n) for n in range(1, 6)}
 
 
+def nodes_of(module: str) -> np.ndarray:
+    """`support` of the support declared in solver/shape/<module>.py (the first name it declares)."""
+    from importlib import import_module
+    return support(import_module(f"solver.shape.{module}").SHAPE_FUNCTIONS[0].support)
+
+
 def support(nodes: int) -> np.ndarray:
     """The nodes per axis as a compile-time constant of `weights`: an empty array of that many
     dimensions (read as `.ndim`), so the small loops over them unroll as they did when each

@@ -1,0 +1,76 @@
+"""Weakly compressible Newtonian fluid ([K] eq. 2.17-2.18, [R] eq. 5.30-5.31).
+
+sigma = 2 mu_N dev(D) - p I, D = sym(L) (padded to 3x3: plane strain has D_zz = 0,
+1D uniaxial strain D_yy = D_zz = 0, so the deviator has a zz (and yy) part and
+tr(sigma) = -3 p exactly). The Tait equation of state gives the pressure from the
+density, and the density from J: rho = rho0 / J with J = V / V0, so nothing but
+the kinematics the step already keeps is needed.
+
+Sound speed: c^2 = dp/drho = K gamma / rho0 (rho / rho0)^(gamma - 1), sqrt(K gamma
+/ rho0) at rest. Compressed water is stiffer, so the time step follows the largest
+c over the particles of the last update.
+
+Stored energy (for the energy balance): the work done compressing the fluid,
+per reference volume W(J) = -int_1^J p dJ' = K [(J^(1 - gamma) - 1) / (gamma - 1)
++ J - 1], which is K gamma (J - 1)^2 / 2 for small strains. The tension cut-off
+clips p but not this energy: with the cut-off active it is an upper estimate.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(parallel=True, cache=True)
+def _update(L, volume, volume0, stress, rho0, K, gamma, mu, min_pressure):
+    """Stress of every particle; returns the largest sound speed."""
+    n, dim = L.shape[0], L.shape[1]
+    c2_max = 0.0
+    for p in prange(n):
+        ratio = volume0[p] / volume[p]                  # rho / rho0 = 1 / J
+        stiff = ratio**gamma
+        pressure = max(K * (stiff - 1.0), min_pressure)
+        c2_max = max(c2_max, K * gamma * stiff / (ratio * rho0))   # (a max reduction over threads)
+        tr = 0.0
+        for a in range(dim):
+            tr += L[p, a, a]
+        for a in range(3):
+            for b in range(3):
+                d = 0.5 * (L[p, a, b] + L[p, b, a]) if a < dim and b < dim else 0.0
+                if a == b:
+                    d -= tr / 3.0
+                    stress[p, a, b] = 2.0 * mu * d - pressure
+                else:
+                    stress[p, a, b] = 2.0 * mu * d
+    return math.sqrt(c2_max)
+
+
+@njit(cache=True)
+def _energy(volume, volume0, K, gamma, out):
+    for p in range(volume.shape[0]):
+        J = volume[p] / volume0[p]
+        # (J^(1-gamma) - 1) / (gamma - 1) tends to -ln J as gamma -> 1
+        w = -math.log(J) if gamma == 1.0 else (J ** (1.0 - gamma) - 1.0) / (gamma - 1.0)
+        out[p] = volume0[p] * K * (w + J - 1.0)
+
+
+class Fluid:
+    def __init__(self, config, dimension: int):
+        self.density = config.density
+        self.K, self.gamma, self.mu = config.bulk_modulus, config.gamma, config.viscosity
+        self.min_pressure = -config.tension_cutoff if config.tension_cutoff is not None else -math.inf
+        self.wave_speed = config.dilatational_wave_speed()
+
+    def update_stress(self, particles, sl: slice, dt: float) -> None:
+        self.wave_speed = _update(particles.L[sl], particles.volume[sl], particles.volume0[sl], particles.stress[sl],
+                                  self.density, self.K, self.gamma, self.mu, self.min_pressure)
+
+    def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
+        out = np.empty(sl.stop - sl.start)
+        _energy(particles.volume[sl], particles.volume0[sl], self.K, self.gamma, out)
+        return out
+
+    def strain_energy(self, particles, sl: slice) -> float:
+        return float(self.particle_strain_energy(particles, sl).sum())

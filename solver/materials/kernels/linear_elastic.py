@@ -1,0 +1,50 @@
+"""Hypoelastic linear elasticity (review B.1, eq. B.5).
+
+sigma <- sigma + lambda tr(de) I + 2 mu de, with de = sym(L) dt. 2D is plane
+strain (de_zz = 0 but sigma_zz evolves), 1D is uniaxial strain. The stored energy
+is sigma : C^-1 : sigma / 2, exact for this model without keeping the strain.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from solver.materials.kernels.elastic import IsotropicElastic
+
+
+@njit(parallel=True, cache=True)
+def _update(L, stress, dt, lam, mu):
+    n, dim = L.shape[0], L.shape[1]
+    for p in prange(n):
+        tr = 0.0
+        for a in range(dim):
+            tr += L[p, a, a]
+        tr *= dt
+        for a in range(3):
+            stress[p, a, a] += lam * tr
+        for a in range(dim):
+            for b in range(dim):
+                stress[p, a, b] += mu * dt * (L[p, a, b] + L[p, b, a])
+
+
+@njit(cache=True)
+def _energy(stress, volume, lam, mu, out):
+    c = lam / (3.0 * lam + 2.0 * mu)
+    for p in range(stress.shape[0]):
+        ss = 0.0
+        tr = 0.0
+        for a in range(3):
+            tr += stress[p, a, a]
+            for b in range(3):
+                ss += stress[p, a, b] * stress[p, a, b]
+        out[p] = volume[p] * (ss - c * tr * tr) / (4.0 * mu)
+
+
+class LinearElastic(IsotropicElastic):
+    def update_stress(self, particles, sl: slice, dt: float) -> None:
+        _update(particles.L[sl], particles.stress[sl], dt, self.lam, self.mu)
+
+    def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
+        out = np.empty(sl.stop - sl.start)
+        _energy(particles.stress[sl], particles.volume[sl], self.lam, self.mu, out)
+        return out

@@ -1,0 +1,96 @@
+"""The building blocks of the scene's pydantic models, shared by solver/scene.py
+and the material declarations (solver/materials/<name>.py).
+
+They live here, below both, because the scene's `materials` union is built from
+the material registry: a material module cannot import solver.scene (it would
+import itself through the union), and scene.py imports the materials. Like the
+scene, this module loads without numba.
+"""
+
+import math
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, Strict, field_validator
+from pydantic_core import PydanticCustomError
+
+from solver import capabilities
+
+Real = Annotated[float, Strict()]  # ints are accepted, booleans and strings are not
+Boolean = Annotated[bool, Strict()]
+Positive = Annotated[float, Strict(), Field(gt=0)]
+NonNegative = Annotated[float, Strict(), Field(ge=0)]
+
+
+def scene_error(message: str) -> PydanticCustomError:
+    """One problem, at the path of the value being validated."""
+    # "{detail}" keeps braces inside the message (e.g. quoted user text) literal.
+    return PydanticCustomError("scene_error", "{detail}", {"detail": message})
+
+
+def problems_at(problems: list[tuple[str, str]]) -> PydanticCustomError:
+    """Several problems at paths relative to the model that raises them."""
+    detail = "; ".join(f"{path}: {message}" if path else message for path, message in problems)
+    return PydanticCustomError("scene_problems", "{detail}", {"detail": detail, "problems": problems})
+
+
+def require_supported(value: Any, capability: str) -> Any:
+    """`value` if the solver implements it (the set `capability` of solver.capabilities,
+    read now so that tests and later registrations see the current one)."""
+    if value not in getattr(capabilities, capability):
+        raise scene_error(f"{value!r} is not supported yet")
+    return value
+
+
+def fmt(value: float) -> str:
+    return f"{value:g}"
+
+
+class SceneModel(BaseModel):
+    # Every model of the scene: unknown keys are errors, NaN and infinity too.
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class BaseMaterial(SceneModel):
+    """A material entry of the scene. A subclass declares ``model: Literal["<name>"]``,
+    its keys, and the wave speed the time step estimate starts from."""
+
+    @field_validator("model", check_fields=False)
+    @classmethod
+    def _model_supported(cls, value: str) -> str:
+        return require_supported(value, "MATERIAL_MODELS")
+
+    def dilatational_wave_speed(self) -> float | None:
+        """Speed of the fastest wave, for the adaptive time step; None when the
+        material alone does not determine it."""
+        return None
+
+    def initial_wave_speed(self, body: Any) -> float:
+        """The wave speed in `body` (made of this material) at t = 0, for the summary's
+        time step estimate; 0 where no wave travels."""
+        return self.dilatational_wave_speed() or 0.0
+
+
+class ElasticMaterial(BaseMaterial):
+    """Isotropic elastic constants shared by the solid models."""
+
+    density: Positive
+    youngs_modulus: Positive
+    poisson_ratio: Annotated[float, Strict(), Field(ge=0, lt=0.5)]
+
+    def lame_parameters(self) -> tuple[float, float]:
+        """(lambda, mu) from Young's modulus and Poisson's ratio."""
+        e, nu = self.youngs_modulus, self.poisson_ratio
+        return e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        return self.youngs_modulus / (3 * (1 - 2 * self.poisson_ratio))
+
+    @property
+    def shear_modulus(self) -> float:
+        return self.lame_parameters()[1]
+
+    def dilatational_wave_speed(self) -> float:
+        """sqrt((lambda + 2 mu) / rho)."""
+        lam, mu = self.lame_parameters()
+        return math.sqrt((lam + 2 * mu) / self.density)

@@ -1,0 +1,26 @@
+"""The declaration of a shape function: what the scene validation, the summary and
+the step need to know about it without loading its numba kernel."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class ShapeFunction:
+    """One shape function (the scene's ``method.shape_function`` value `name`)."""
+
+    name: str
+    support: int  # nodes per axis that one particle touches
+    kernels: str  # module with the numba kernel `weights` (and `prepare`, `evaluate`), imported on first use
+    evaluate: str = "evaluate"  # the kernel module's evaluate function for this name (cpGIMP: evaluate_contiguous)
+    # c in D_p = c h^2 per axis (APIC's inertia, solver/transfer.py) where D_p is the same at
+    # every position; None where it varies (boundary-modified, particle-size dependent, ...)
+    apic_d: float | None = None
+    apic: bool = True  # transfer 'apic' may use it
+    apic_refusal: str = ""  # the validation message where it may not
+    formulations: frozenset[str] = frozenset({"ulmpm", "tlmpm"})
+    formulation_refusal: str = ""  # the validation message for the other formulations
+    least_cells: int = 1  # cells per axis the grid needs
+    even_cells: bool = False  # its elements span two cells: the grid gets an even number per axis
+    end_margin: float = 0.0  # cells a body keeps from the grid ends (no boundary-modified variant)
