@@ -34,23 +34,16 @@ MAX_DEPTH = 50
 
 CONSTANTS = {"pi": math.pi, "e": math.e}
 
+# Functions of one argument, by name.
+_UNARY = {
+    "sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan,
+    "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh, "exp": np.exp, "log": np.log, "sqrt": np.sqrt,
+    "abs": np.abs, "sign": np.sign,
+}
 # name -> (numpy function, minimum number of arguments, maximum or None for any)
 FUNCTIONS: dict[str, tuple[Callable[..., np.ndarray], int, int | None]] = {
-    "sin": (np.sin, 1, 1),
-    "cos": (np.cos, 1, 1),
-    "tan": (np.tan, 1, 1),
-    "asin": (np.arcsin, 1, 1),
-    "acos": (np.arccos, 1, 1),
-    "atan": (np.arctan, 1, 1),
+    **{name: (function, 1, 1) for name, function in _UNARY.items()},
     "atan2": (np.arctan2, 2, 2),   # atan2(y, x): the angle of (x, y), in (-pi, pi]
-    "sinh": (np.sinh, 1, 1),
-    "cosh": (np.cosh, 1, 1),
-    "tanh": (np.tanh, 1, 1),
-    "exp": (np.exp, 1, 1),
-    "log": (np.log, 1, 1),
-    "sqrt": (np.sqrt, 1, 1),
-    "abs": (np.abs, 1, 1),
-    "sign": (np.sign, 1, 1),
     "min": (lambda *a: _reduce(np.minimum, a), 2, None),
     "max": (lambda *a: _reduce(np.maximum, a), 2, None),
     "where": (np.where, 3, 3),

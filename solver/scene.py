@@ -54,6 +54,7 @@ from solver.schema import (
     fmt,
     problems_at,
     require_supported,
+    supported,
     scene_error,
 )
 
@@ -169,15 +170,9 @@ class Method(SceneModel):
     transfer: Literal["flip", "pic", "apic"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
 
-    @field_validator("formulation")
-    @classmethod
-    def _formulation_supported(cls, value: str) -> str:
-        return require_supported(value, "FORMULATIONS")
+    _formulation_supported = supported("formulation", "FORMULATIONS")
 
-    @field_validator("scheme")
-    @classmethod
-    def _scheme_supported(cls, value: str) -> str:
-        return require_supported(value, "SCHEMES")
+    _scheme_supported = supported("scheme", "SCHEMES")
 
     @field_validator("shape_function")
     @classmethod
@@ -313,10 +308,7 @@ class VelocityCondition(SceneModel):
     where: BoxGeometry
     velocity: Annotated[list[TimeValue | None], Field(min_length=1)]
 
-    @field_validator("type")
-    @classmethod
-    def _type_supported(cls, value: str) -> str:
-        return require_supported(value, "BOUNDARY_CONDITIONS")
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
 
 
 class WallCondition(SceneModel):
@@ -325,15 +317,9 @@ class WallCondition(SceneModel):
     mode: Literal["stick", "slip", "friction"]
     friction: NonNegative | None = None  # Coulomb coefficient, mode "friction" only
 
-    @field_validator("type")
-    @classmethod
-    def _type_supported(cls, value: str) -> str:
-        return require_supported(value, "BOUNDARY_CONDITIONS")
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
 
-    @field_validator("mode")
-    @classmethod
-    def _mode_supported(cls, value: str) -> str:
-        return require_supported(value, "WALL_MODES")
+    _mode_supported = supported("mode", "WALL_MODES")
 
     @model_validator(mode="after")
     def _friction_with_mode(self) -> "WallCondition":

@@ -41,6 +41,12 @@ def require_supported(value: Any, capability: str) -> Any:
     return value
 
 
+def supported(field: str, capability: str):
+    """A validator of `field` (declare it in the model's body) that refuses a value the solver
+    does not implement yet: require_supported(value, capability)."""
+    return field_validator(field)(classmethod(lambda cls, value: require_supported(value, capability)))
+
+
 def fmt(value: float) -> str:
     return f"{value:g}"
 
