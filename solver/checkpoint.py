@@ -74,6 +74,7 @@ class Restart:
     frames_written: int
     external_work: float
     boundary_work: float
+    damping_work: float
     particles: dict[str, np.ndarray]
     series: dict[str, np.ndarray]
 
@@ -129,7 +130,7 @@ class Checkpointer:
                 h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, scene=self.scene_json,
                                 step=sim.step_count, time=sim.time, dt=dt, frame_next=frame_next,
                                 frames_written=frames_written, external_work=sim.external_work,
-                                boundary_work=sim.boundary_work)
+                                boundary_work=sim.boundary_work, damping_work=sim.damping_work)
                 for name, array in particles.items():
                     h5.create_dataset(f"particles/{name}", data=array)
                 for name, values in self.writer.series().items():
@@ -185,7 +186,8 @@ def load(out_dir: Path, scene) -> Restart | None:
     restart = Restart(step=int(attrs["step"]), time=float(attrs["time"]), dt=float(attrs["dt"]),
                       frame_next=int(attrs["frame_next"]), frames_written=int(attrs["frames_written"]),
                       external_work=float(attrs["external_work"]),
-                      boundary_work=float(attrs["boundary_work"]), particles=particles, series=series)
+                      boundary_work=float(attrs["boundary_work"]),
+                      damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series)
     source = _result_to_continue(Path(out_dir))
     try:
         complete = len(list_frames(source)) if source else 0
@@ -228,6 +230,7 @@ def _restore(sim, restart: Restart) -> None:
     sim.place()
     sim.time, sim.step_count = restart.time, restart.step
     sim.external_work, sim.boundary_work = restart.external_work, restart.boundary_work
+    sim.damping_work = restart.damping_work
 
 
 def _set_aside_result(out_dir: Path) -> None:

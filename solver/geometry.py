@@ -84,6 +84,115 @@ class Union:
         return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
 
 
+# Vertices a polygon may have: bounds the self-intersection check (`first_crossing`),
+# whose worst case is O(n^2) pairs of edges.
+MAX_POLYGON_VERTICES = 10_000
+
+
+@dataclass(frozen=True)
+class Polygon:
+    """A simple 2D polygon (concave allowed, either orientation), by its vertices.
+
+    The inside test is the even-odd rule, vectorised over the points: with the points
+    sorted by y once, each edge only visits the points in its own y band (a
+    `searchsorted` slice), so the cost is O(n log n + points in the edges' bands), and
+    no Python loop runs over points. Points on an edge may be counted either side."""
+
+    vertices: np.ndarray   # (n, 2)
+
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        order = np.argsort(points[:, 1], kind="stable")
+        x, y = points[order, 0], points[order, 1]
+        inside = np.zeros(len(points), dtype=bool)
+        start = self.vertices
+        end = np.roll(self.vertices, -1, axis=0)
+        for (x0, y0), (x1, y1) in zip(start.tolist(), end.tolist()):
+            if y0 == y1:
+                continue   # a horizontal edge crosses no horizontal ray
+            low, high = min(y0, y1), max(y0, y1)
+            a, b = np.searchsorted(y, low, side="left"), np.searchsorted(y, high, side="left")   # low <= y < high
+            if a == b:
+                continue
+            crossing = x0 + (y[a:b] - y0) * (x1 - x0) / (y1 - y0)
+            inside[a:b] ^= x[a:b] < crossing
+        out = np.empty(len(points), dtype=bool)
+        out[order] = inside
+        return out
+
+    def bounding_box(self) -> BoundingBox:
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+
+def first_crossing(vertices: np.ndarray, chunk: int = 1 << 20) -> tuple[int, int] | None:
+    """The first pair of edges (i, j), i < j, of a closed polygon that touch or cross
+    although they are not neighbours (edge i runs from vertex i to vertex i + 1), or
+    neighbours that fold back onto each other; None for a simple polygon.
+
+    A sweep along x or y (the one with fewer pairs): the edges sorted by their smallest
+    coordinate, each paired only with the later ones whose range overlaps its own (a
+    `searchsorted`), and those pairs whose boxes overlap tested exactly, `chunk` pairs
+    at a time. Near-linear for the outlines scenes have (10,000 vertices on a circle:
+    10 ms); at worst (long edges overlapping along both axes) O(n^2) pairs, about 10 s
+    at MAX_POLYGON_VERTICES."""
+    p = np.asarray(vertices, dtype=np.float64)
+    q = np.roll(p, -1, axis=0)
+    n = len(p)
+    low, high = np.minimum(p, q), np.maximum(p, q)
+    scale = float(np.max(np.abs(p))) or 1.0
+    eps = 1e-12 * scale * scale
+    order, counts = min((_sweep(low[:, a], high[:, a], 1e-12 * scale) for a in (0, 1)), key=lambda s: s[1].sum())
+    found = []
+    start = 0
+    while start < n:
+        end = start + max(1, int(np.searchsorted(np.cumsum(counts[start:]), chunk, side="right")))
+        k = np.repeat(np.arange(start, end), counts[start:end])
+        first = np.repeat(np.arange(start, end) + 1 - np.cumsum(np.r_[0, counts[start:end - 1]]), counts[start:end])
+        m = np.arange(len(k)) + first
+        i, j = np.minimum(order[k], order[m]), np.maximum(order[k], order[m])
+        near = np.all((low[i] <= high[j] + 1e-12 * scale) & (low[j] <= high[i] + 1e-12 * scale), axis=1)
+        i, j = i[near], j[near]
+        hits = _segments_touch(p[i], q[i], p[j], q[j], eps)
+        neighbours = (j == i + 1) | ((i == 0) & (j == n - 1))
+        hits &= ~neighbours | _folds_back(p[i], q[i], p[j], q[j], eps)
+        found += list(zip(i[hits].tolist(), j[hits].tolist()))
+        start = end
+    return min(found) if found else None
+
+
+def _sweep(low: np.ndarray, high: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """The edges sorted by `low`, and for each how many later ones start before it ends."""
+    order = np.argsort(low, kind="stable")
+    stops = np.searchsorted(low[order], high[order] + tol, side="right")
+    return order, np.maximum(stops - np.arange(1, len(low) + 1), 0)
+
+
+def _cross(o, a, b):
+    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
+
+
+def _on_segment(p, q, r, eps):
+    """r on the segment pq, given that the three are collinear."""
+    return ((np.minimum(p[..., 0], q[..., 0]) - eps <= r[..., 0]) & (r[..., 0] <= np.maximum(p[..., 0], q[..., 0]) + eps)
+            & (np.minimum(p[..., 1], q[..., 1]) - eps <= r[..., 1]) & (r[..., 1] <= np.maximum(p[..., 1], q[..., 1]) + eps))
+
+
+def _segments_touch(p1, q1, p2, q2, eps):
+    d1, d2 = _cross(p2, q2, p1), _cross(p2, q2, q1)
+    d3, d4 = _cross(p1, q1, p2), _cross(p1, q1, q2)
+    proper = (((d1 > eps) & (d2 < -eps)) | ((d1 < -eps) & (d2 > eps))) & \
+             (((d3 > eps) & (d4 < -eps)) | ((d3 < -eps) & (d4 > eps)))
+    touch = ((np.abs(d1) <= eps) & _on_segment(p2, q2, p1, eps)) | ((np.abs(d2) <= eps) & _on_segment(p2, q2, q1, eps)) \
+        | ((np.abs(d3) <= eps) & _on_segment(p1, q1, p2, eps)) | ((np.abs(d4) <= eps) & _on_segment(p1, q1, q2, eps))
+    return proper | touch
+
+
+def _folds_back(p1, q1, p2, q2, eps):
+    """Neighbouring edges that are collinear and point back (a zero-width spike)."""
+    d1, d2 = q1 - p1, q2 - p2
+    return (np.abs(_cross(p1, q1, q2) + _cross(p2, q2, p1)) <= eps) & (np.abs(d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0]) <= eps) \
+        & ((d1 * d2).sum(axis=-1) < 0)
+
+
 def _first_and(parts, points: np.ndarray, each) -> np.ndarray:
     """Inside the first part and, for every other part, `each` of inside it."""
     inside = parts[0].contains(points)
@@ -125,6 +234,8 @@ def from_spec(spec) -> Geometry:
         return Box(_vector(spec.lower), _vector(spec.upper))
     if kind == "sphere":
         return Sphere(_vector(spec.center), float(spec.radius))
+    if kind == "polygon":
+        return Polygon(np.asarray(spec.vertices, dtype=np.float64).reshape(-1, 2))
     if kind == "cylinder":
         return Cylinder(_vector(spec.center), float(spec.radius), int(spec.axis), float(spec.height))
     parts = tuple(from_spec(part) for part in spec.parts)

@@ -1,13 +1,20 @@
-"""Body accelerations: gravity plus the scene's body force expressions.
+"""Loads: body accelerations (gravity plus the scene's body force expressions) and
+the scene's `loads` (forces and tractions on particles, a hook of the step).
 
 `body_force` is a force per unit mass (an acceleration), in the current (x, y, z)
 and reference (X, Y, Z) coordinates and time t, as manufactured solutions need.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from solver.expressions import compile_expression
+from solver.geometry import from_spec
+from solver.scene import SceneError
+from solver.state import make_stencil
+from solver.surface import body_spacing, surface_areas
 
 CURRENT = ("x", "y", "z")
 REFERENCE = ("X", "Y", "Z")
@@ -53,3 +60,84 @@ class BodyLoads:
         for a, e in enumerate(self.expressions):
             acc[:, a] = self.gravity[a] + (e if isinstance(e, float) else e.evaluate(**env))
         return acc
+
+
+class AppliedLoads:
+    """The scene's `loads` as a hook: point forces and tractions on particles.
+
+    Found once, from the particles as seeded: a force load's particles are the body's
+    particles inside `where`, each with the share m_p / sum m of the total force; a
+    traction's are the body's surface particles inside `where` (solver/surface.py),
+    each with its area A_p. The shares live in `particles.extra["load_share"]`
+    (n, loads), so they follow the particles between processes.
+
+    after_forces: f_p = sum_i share_pi F_i(t) and f_I += sum_p phi_I(x_p) f_p, with
+    the weights evaluated for the loaded particles only (the fused backend stores
+    none; a few boundary particles cost little beside the step).
+    end_step: their work, dt sum_p f_p . v_p^{t+dt}, into the external work.
+    """
+
+    SHARE = "load_share"
+
+    def __init__(self, scene, particles):
+        self.dimension = scene.dimension
+        self.vectors = [[compile_expression(c, ("t",)) if isinstance(c, str) else float(c) for c in load.vector]
+                        for load in scene.loads]
+        share = particles.require(self.SHARE, (len(scene.loads),))
+        for i, load in enumerate(scene.loads):
+            share[:, i] = _shares(scene, i, particles)
+        self._rows_of = (None, None)
+        self.rows, self.force = np.zeros(0, dtype=np.int64), np.zeros((0, scene.dimension))
+
+    def values(self, t: float) -> np.ndarray:
+        """(loads, dim): each load's force or traction at time t."""
+        return np.array([[c if isinstance(c, float) else float(c.evaluate(t=t)) for c in vector]
+                         for vector in self.vectors]).reshape(len(self.vectors), self.dimension)
+
+    def _rows(self, particles) -> np.ndarray:
+        share = particles.extra[self.SHARE]
+        if self._rows_of[0] is not share:   # the particles were placed again (processes)
+            self._rows_of = (share, np.flatnonzero(np.any(share != 0.0, axis=1)))
+        return self._rows_of[1]
+
+    def after_forces(self, sim) -> None:
+        p = sim.particles
+        rows = self._rows(p)
+        self.rows = rows
+        self.force = p.extra[self.SHARE][rows] @ self.values(sim.time)
+        if rows.size == 0:
+            return
+        x = np.ascontiguousarray(sim.formulation.positions(p)[rows])
+        stencil = make_stencil(rows.size, self.dimension, sim.shape.SUPPORT)
+        subset = SimpleNamespace(extra={k: np.ascontiguousarray(a[rows]) for k, a in p.extra.items()},
+                                 F=np.ascontiguousarray(p.F[rows]))
+        sim.domain.weights(sim.shape, sim.spec, x, subset, sim.grid, stencil)   # (outside: the step reports it)
+        np.add.at(sim.grid.force, stencil.idx, stencil.w[:, :, None] * self.force[:, None, :])
+
+    def end_step(self, sim, dt: float) -> None:
+        if self.rows.size:
+            sim.external_work += dt * float(np.sum(self.force * sim.particles.v[self.rows]))
+
+
+def _shares(scene, index: int, particles) -> np.ndarray:
+    """Each particle's share of load `index`: m_p / sum m (force) or A_p (traction)."""
+    load = scene.loads[index]
+    body = next(b for b, candidate in enumerate(scene.bodies) if candidate.name == load.body)
+    mine = np.flatnonzero(particles.body == body)
+    where = from_spec(load.where).contains(particles.x[mine])
+    share = np.zeros(particles.count)
+    if load.type == "force":
+        chosen = mine[where]
+        mass = particles.mass[chosen]
+        if mass.sum() > 0:
+            share[chosen] = mass / mass.sum()
+    else:
+        spec = scene.bodies[body]
+        _, area = surface_areas(particles.x[mine], particles.volume0[mine], scene.grid_lower(),
+                                body_spacing(scene, spec))
+        share[mine[where]] = area[where]
+    if not np.any(share):
+        what = "particles" if load.type == "force" else "surface particles"
+        raise SceneError([{"path": f"loads[{index}].where",
+                           "message": f"contains none of the {what} of body {load.body!r}"}])
+    return share

@@ -192,6 +192,7 @@ class _TimeLoop:
             writer.append_series(time=sim.time, dt=self.dt, kinetic_energy=e.kinetic,
                                  strain_energy=e.strain, total_energy=e.total,
                                  external_work=e.external_work, boundary_work=e.boundary_work,
+                                 **({"damping_work": e.damping_work} if sim.scene.damping else {}),
                                  **sim.reactions())
         supplied = self.initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0)
         if not e.total <= ENERGY_GROWTH_LIMIT * supplied + self.energy_floor:

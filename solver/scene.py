@@ -262,6 +262,25 @@ class CylinderGeometry(_Geometry):
     height: Positive
 
 
+class PolygonGeometry(_Geometry):
+    """2D only: a simple polygon (concave allowed, either orientation), by its vertices."""
+
+    type: Literal["polygon"]
+    vertices: Annotated[list[Annotated[list[Real], Field(min_length=2, max_length=2)]],
+                        Field(min_length=3, max_length=geometry_shapes.MAX_POLYGON_VERTICES)]
+
+    @field_validator("vertices")
+    @classmethod
+    def _simple(cls, vertices: list[list[float]]) -> list[list[float]]:
+        crossing = geometry_shapes.first_crossing(np.array(vertices, dtype=np.float64))
+        if crossing is not None:
+            i, j = crossing
+            n = len(vertices)
+            raise scene_error(f"the polygon intersects itself: edge {i} (vertices[{i}] to vertices[{(i + 1) % n}]) "
+                              f"meets edge {j} (vertices[{j}] to vertices[{(j + 1) % n}])")
+        return vertices
+
+
 class UnionGeometry(_Geometry):
     type: Literal["union"]
     parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
@@ -280,7 +299,8 @@ class IntersectionGeometry(_Geometry):
 
 
 GeometrySpec = Annotated[
-    Union[BoxGeometry, SphereGeometry, CylinderGeometry, UnionGeometry, DifferenceGeometry, IntersectionGeometry],
+    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, UnionGeometry, DifferenceGeometry,
+          IntersectionGeometry],
     Field(discriminator="type"),
 ]
 for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
@@ -331,6 +351,54 @@ class WallCondition(SceneModel):
 
 
 BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition], Field(discriminator="type")]
+
+
+# --------------------------------------------------------------------------- loads, damping
+
+LoadVector = Annotated[list[TimeValue], Field(min_length=1, max_length=3)]
+
+
+class ForceLoad(SceneModel):
+    """A total force, shared by the body's particles inside ``where`` in proportion to their mass."""
+
+    type: Literal["force"]
+    body: str
+    where: BoxGeometry
+    force: LoadVector
+
+    @property
+    def vector(self) -> list[float | str]:
+        return self.force
+
+
+class TractionLoad(SceneModel):
+    """A force per area on the body's surface particles inside ``where`` (solver/surface.py)."""
+
+    type: Literal["traction"]
+    body: str
+    where: BoxGeometry
+    traction: LoadVector
+
+    @property
+    def vector(self) -> list[float | str]:
+        return self.traction
+
+
+Load = Annotated[Union[ForceLoad, TractionLoad], Field(discriminator="type")]
+
+
+class Damping(SceneModel):
+    """Grid damping: "local" (Cundall: -alpha |f_I| sign(v_I) per component, alpha in [0, 1])
+    or "viscous" (-c m_I v_I, c in 1/s)."""
+
+    type: Literal["local", "viscous"]
+    coefficient: NonNegative
+
+    @model_validator(mode="after")
+    def _local_at_most_one(self) -> "Damping":
+        if self.type == "local" and self.coefficient > 1:
+            raise problems_at([("coefficient", "must be <= 1 for local damping (a share of the unbalanced force)")])
+        return self
 
 
 # --------------------------------------------------------------------------- time, output
@@ -441,6 +509,8 @@ class Scene(SceneModel):
     boundary_conditions: list[BoundaryCondition] = Field(default_factory=list)
     gravity: Vector | None = None
     body_force: list[BodyForceValue] | None = None
+    loads: list[Load] = Field(default_factory=list)
+    damping: Damping | None = None
     time: Time
     output: Output = Field(default_factory=Output)
     parallel: Parallel = Field(default_factory=Parallel)
@@ -569,6 +639,8 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     if grid_ok and scene.grid.lower is not None and scene.grid.upper is not None:
         problems += _shape_function_problems(scene)
 
+    problems += _load_problems(scene, names, length_ok, expressions_ok)
+
     walls: dict[str, int] = {}
     for i, condition in enumerate(scene.boundary_conditions):
         path = f"boundary_conditions[{i}]"
@@ -589,6 +661,25 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     return problems
 
 
+def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_ok) -> list[tuple[str, str]]:
+    """Each load names a deformable body, and its box and vector have the scene's dimension."""
+    problems = []
+    for i, load in enumerate(scene.loads):
+        path = f"loads[{i}]"
+        body = names.get(load.body)
+        if body is None:
+            defined = ", ".join(repr(name) for name in names)
+            problems.append((f"{path}.body", f"unknown body {load.body!r}; defined: {defined}"))
+        elif isinstance(scene.materials.get(scene.bodies[body].material), Rigid):
+            problems.append((f"{path}.body", f"{load.body!r} is a rigid body: it moves as prescribed, a load "
+                                             "does not act on it"))
+        length_ok(f"{path}.where.lower", load.where.lower)
+        length_ok(f"{path}.where.upper", load.where.upper)
+        if length_ok(f"{path}.{load.type}", load.vector):
+            expressions_ok(f"{path}.{load.type}", load.vector, TIME_VARIABLES)
+    return problems
+
+
 def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str, str]]) -> bool:
     """Check vector lengths of a geometry tree against ``dim``; True if all fit."""
     if isinstance(spec, (UnionGeometry, DifferenceGeometry, IntersectionGeometry)):
@@ -596,6 +687,9 @@ def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str,
         return all(results)
     if isinstance(spec, CylinderGeometry) and dim != 3:
         problems.append((f"{path}.type", f"a cylinder is a 3D geometry; in {dim}D use a sphere or a box"))
+        return False
+    if isinstance(spec, PolygonGeometry) and dim != 2:
+        problems.append((f"{path}.type", f"a polygon is a 2D geometry; this scene is {dim}D"))
         return False
     ok = True
     for name in ("lower", "upper", "center"):

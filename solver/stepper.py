@@ -4,7 +4,7 @@
 processes, on this process's slab); the step itself is written once per scheme in
 solver/step/schemes.py, over phases that a backend implements (solver/step/), for
 the formulation the scene names (ULMPM or TLMPM), with the physics that is not the
-bare algorithm (rigid bodies, boundary conditions, hoop terms, the loads' work)
+bare algorithm (rigid bodies, boundary conditions, hoop terms, the loads, damping)
 plugged in at named hook points.
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 from solver import kernels, parallel, shape, step, threads
 from solver.axisymmetric import Axisymmetry
 from solver.errors import SolverError
-from solver.loads import BodyLoads
+from solver.loads import AppliedLoads, BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, material_slices
@@ -46,6 +46,7 @@ class Energies:
     strain: float
     external_work: float
     boundary_work: float
+    damping_work: float = 0.0   # work of the damping forces (<= 0), solver/damping.py
 
     @property
     def total(self) -> float:
@@ -70,6 +71,7 @@ class ExplicitMPM:
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
         self.loads = BodyLoads(scene)
+        self.applied_loads = AppliedLoads(scene, self.particles) if scene.loads else None   # as seeded
         self.formulation = step.FORMULATIONS[method.formulation]()
         if self.loads.needs_reference or self.formulation.reference:   # TLMPM: slabs of X too
             self.particles.X = self.particles.x.copy()
@@ -78,6 +80,7 @@ class ExplicitMPM:
         self.step_count = 0
         self.external_work = 0.0
         self.boundary_work = 0.0
+        self.damping_work = 0.0
         self.scheme = step.SCHEMES[method.scheme]
         self.phases = step.backend_for(scene, general)(self)
         self.added_hooks = []   # hooks given by add_hook, kept when the grid is placed again
@@ -174,7 +177,8 @@ class ExplicitMPM:
     def energies(self) -> Energies:
         p = self.particles
         strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
-        local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work]
+        local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work,
+                 self.damping_work]
         return Energies(*(float(e) for e in self.domain.sum(local)))
 
     def check_finite(self) -> None:

@@ -9,11 +9,17 @@ calls the method of every hook that has one, in the order the hooks were made
 |-------------------------------------|-----------------------------------------------------|
 | begin_step(sim, t_end)              | before the scheme: conditions at t + dt, rigid marks |
 | after_forces(sim)                   | after P2G put f_I on the grid, before ghost sums     |
+| before_update(sim, dt)              | on the summed f_I (and m_I, (mv)_I), before v_I^t and v~_I^{t+dt} are formed from them |
 | constrain(grid_mass, v, record)     | on a grid velocity (v_I^t, v~_I^{t+dt}, MUSL's remapped v_I^{t+dt}) before the halo shares it; returns the constraint's work; `record` marks v~_I^{t+dt} |
 | after_g2p(sim, dt)                  | after the particles took the grid velocities         |
 | after_kinematics(sim, dt, v_grid)   | after L_p, F_p, V_p from the grid velocity v_grid    |
 | after_stress(sim, dt)               | after the materials' stress update                   |
 | end_step(sim, dt)                   | after the scheme: rigid moves, work of the loads     |
+
+The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_step),
+boundary conditions (begin_step, constrain), hoop terms, the body loads' work
+(end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `damping`
+(before_update, its work at after_g2p: solver/damping.py).
 
 A hook that needs the stored stencil (the hoop terms) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
@@ -23,8 +29,9 @@ has added its part (solver/step/phases.py).
 from __future__ import annotations
 
 from solver import kernels
+from solver.damping import Damping
 
-POINTS = ("begin_step", "after_forces", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
+POINTS = ("begin_step", "after_forces", "before_update", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
 
 
 class Hooks:
@@ -83,10 +90,19 @@ def _external_work(sim):
     return ExternalWork() if sim.loads.any else None
 
 
+def _applied_loads(sim):
+    return sim.applied_loads
+
+
+def _damping(sim):
+    return Damping(sim.scene.damping) if sim.scene.damping is not None else None
+
+
 # Each entry makes the hook a scene needs (or None). The order is the order their effects
 # compose in: rigid bodies impose before the boundary conditions, which win where both
-# apply; the loads' work is counted after the rigid bodies moved.
-HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work]
+# apply; the loads' work is counted after the rigid bodies moved; damping acts on the
+# forces of every other hook.
+HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping]
 
 
 def scene_hooks(sim) -> Hooks:

@@ -70,6 +70,8 @@ class Phases:
         """v_I^t = (mv)_I / m_I and v~_I^{t+dt} = v_I^t + dt f_I / m_I, both constrained (lines 14-17)."""
         sim = self.sim
         g = sim.grid
+        for hook in sim.hooks.before_update:
+            hook(sim, dt)
         kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
         self._constrain(g.v_old)
         sim.boundary_work += self._constrain(g.v_new, record=True)
