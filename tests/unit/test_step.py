@@ -25,12 +25,12 @@ SCENE = {
 
 # The hook points each scheme passes, in order (constrain: which grid velocity, recorded or not).
 ORDER = {
-    "usl": ["begin_step", "after_forces", "constrain v_old", "constrain v_new recorded", "after_g2p",
+    "usl": ["begin_step", "after_forces", "before_update", "constrain v_old", "constrain v_new recorded", "after_g2p",
             "after_kinematics v_new", "after_stress", "end_step"],
-    "musl": ["begin_step", "after_forces", "constrain v_old", "constrain v_new recorded", "after_g2p",
+    "musl": ["begin_step", "after_forces", "before_update", "constrain v_old", "constrain v_new recorded", "after_g2p",
              "constrain v_new", "after_kinematics v_new", "after_stress", "end_step"],
     "usf": ["begin_step", "constrain v_old", "after_kinematics v_old", "after_stress", "after_forces",
-            "constrain v_old", "constrain v_new recorded", "after_g2p", "end_step"],
+            "before_update", "constrain v_old", "constrain v_new recorded", "after_g2p", "end_step"],
 }
 
 
@@ -48,6 +48,9 @@ class Recorder:
 
     def after_forces(self, sim):
         self.calls.append("after_forces")
+
+    def before_update(self, sim, dt):
+        self.calls.append("before_update")
 
     def constrain(self, grid_mass, v, record):
         self.calls.append(f"constrain {self._which(v)}" + (" recorded" if record else ""))
