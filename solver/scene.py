@@ -358,30 +358,28 @@ BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition], Field(dis
 LoadVector = Annotated[list[TimeValue], Field(min_length=1, max_length=3)]
 
 
-class ForceLoad(SceneModel):
+class _Load(SceneModel):
+    body: str
+    where: BoxGeometry
+
+    @property
+    def vector(self) -> list[float | str]:
+        """The force or traction components (the field named by the type)."""
+        return getattr(self, self.type)
+
+
+class ForceLoad(_Load):
     """A total force, shared by the body's particles inside ``where`` in proportion to their mass."""
 
     type: Literal["force"]
-    body: str
-    where: BoxGeometry
     force: LoadVector
 
-    @property
-    def vector(self) -> list[float | str]:
-        return self.force
 
-
-class TractionLoad(SceneModel):
+class TractionLoad(_Load):
     """A force per area on the body's surface particles inside ``where`` (solver/surface.py)."""
 
     type: Literal["traction"]
-    body: str
-    where: BoxGeometry
     traction: LoadVector
-
-    @property
-    def vector(self) -> list[float | str]:
-        return self.traction
 
 
 Load = Annotated[Union[ForceLoad, TractionLoad], Field(discriminator="type")]
