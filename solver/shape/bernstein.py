@@ -24,6 +24,7 @@ from solver.shape.tensor import scatter
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 3
+APIC_D = None   # APIC's D_p depends on the position in the element: summed
 
 
 @njit(parallel=True, cache=True)

@@ -19,6 +19,7 @@ from solver.shape.tensor import scatter
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 4
+APIC_D = None   # APIC's D_p: h^2/3 in the interior only, not near the boundary-modified ends
 
 
 @njit(cache=True)

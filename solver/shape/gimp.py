@@ -33,6 +33,7 @@ from solver.shape.tensor import scatter
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 3
+APIC_D = None   # APIC's D_p depends on the particle's box and position: summed
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
 
 

@@ -12,6 +12,7 @@ from numba import njit, prange
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 2  # nodes per axis
+APIC_D = None   # APIC's D_p is not a constant times h^2 (nor is APIC run with hat functions)
 
 
 @njit(parallel=True, cache=True)

@@ -15,6 +15,7 @@ from solver.shape.tensor import scatter
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 3
+APIC_D = 0.25   # APIC's D_p = sum_I w_Ip (x_I - x_p)^2 = h^2/4 per axis, wherever the particle is
 _TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
 
