@@ -75,7 +75,7 @@ class ExplicitMPM:
         # The common scenes take the fused kernels (solver/fused.py): the same algorithm, the
         # same answer to round-off, without storing the stencil. `fused` False forces the general
         # kernels (the tests compare the two).
-        self.fused = fused.applies(scene) and type(self) is ExplicitMPM
+        self.fused = fused.supports(scene) and type(self) is ExplicitMPM
         if self.fused:
             self._step = {"usl": self._step_usl_fused, "musl": self._step_musl_fused}[method.scheme]
             self._support = fused.support_of(method.shape_function)
@@ -241,25 +241,26 @@ class ExplicitMPM:
     def _fused_p2g(self) -> None:
         p, g, f, c = self.particles, self.grid, self.frame, self.copies
         acc = self._acceleration = self.loads.acceleration(p, self.time)
-        kernel = fused.p2g_2d if self.scene.dimension == 2 else fused.p2g_3d
         bad = np.empty(self.threads, dtype=np.int64)
-        kernel(self._support, fused.constant(self.affine is not None), fused.constant(self.loads.any),
-               p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
-               acc, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset,
-               g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+        fused.kernels(self.scene.dimension).p2g(
+            (self._support, fused.constant(self.affine is not None), fused.constant(self.loads.any)),
+            (p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc),
+            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset),
+            (g.mass, g.momentum, g.force), (c.mass, c.momentum, c.force), bad)
         outside = threads.first_of(bad)
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
     def _fused_g2p(self, dt: float, mode: int) -> None:
         p, g, f = self.particles, self.grid, self.frame
-        kernel = fused.g2p_2d if self.scene.dimension == 2 else fused.g2p_3d
         bad = np.empty(self.threads, dtype=np.int64)
-        kernel(self._support, fused.constant(mode), fused.constant(self.affine is not None),
-               fused.constant(self.flip_ratio > 0.0), p.x, p.v, self._affine_matrix,
-               self.flip_ratio, dt,
-               p.mass, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset, g.v_old, g.v_new, p.L, p.F,
-               p.volume, p.volume0, self.rate, g.momentum, self.copies.momentum, bad)
+        d_inv = fused.inverse_d(self.shape, f.inv_h) if self.affine is not None else f.inv_h   # (unused without)
+        fused.kernels(self.scene.dimension).g2p(
+            (self._support, fused.constant(mode), fused.constant(self.affine is not None),
+             fused.constant(self.flip_ratio > 0.0)),
+            (p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume, p.volume0, self.rate),
+            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset), (g.v_old, g.v_new, g.momentum),
+            self.flip_ratio, dt, d_inv, self.copies.momentum, bad)
         self._check_inversion(threads.first_of(bad))
 
     @property
