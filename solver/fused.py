@@ -32,8 +32,12 @@ threads' loops these are compile-time constants and the branches of the other
 variants fold away. Plain arguments would be runtime values there (numba passes
 what a prange loop uses to the threads' function as arguments; measured, runtime
 flags made P2G 20 % slower), and an empty tuple, whose length would say the same,
-cannot be passed in. The other arguments come in tuples too (`particles`, `frame`,
-`grid`), unpacked before the threads' loop.
+cannot be passed in. The grid's frame (lower, h, inv_h, cells, strides, offset)
+comes as one tuple too; both are unpacked before the threads' loop. The particle
+and nodal arrays stay separate arguments: numba types a tuple argument slower than
+plain arrays at each call (measured: 0.45 us more per call with every array in a
+tuple, 0.18 us with the constants and the frame only, against 6 us for the whole
+call on a few hundred particles).
 """
 from __future__ import annotations
 
@@ -84,11 +88,19 @@ def support_of(shape_function: str) -> np.ndarray:
     return constant(FUSED_SHAPES[shape_function])
 
 
+_last_inverse_d: list = [None, None, None]   # module, inv_h, D_p^-1 of the last call
+
+
 def inverse_d(module, inv_h: np.ndarray) -> np.ndarray:
     """APIC's D_p^-1 per axis for the shape function `module`, whose D_p is
     module.APIC_D h^2 (quadratic B-splines: h^2/4): (1 / APIC_D) / h^2, computed as
-    (1 / APIC_D) inv_h inv_h."""
-    return (1.0 / module.APIC_D) * inv_h * inv_h
+    (1 / APIC_D) inv_h inv_h. The last answer is kept for the same module and inv_h
+    array (a grid's, never written in place): the small numpy products cost 0.6 us,
+    a tenth of a G2P call on a few hundred particles."""
+    last = _last_inverse_d
+    if last[0] is not module or last[1] is not inv_h:
+        last[:] = module, inv_h, (1.0 / module.APIC_D) * inv_h * inv_h
+    return last[2]
 
 
 # -- weights along one axis ------------------------------------------------------

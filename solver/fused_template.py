@@ -182,17 +182,14 @@ def _p2g_particle(dim: int) -> list[str]:
 
 def _p2g(dim: int) -> list[str]:
     return _shell(
-        "p2g(variant, particles, frame, grid, copies, bad)",
+        "p2g(variant, x, v, C, mass, volume, stress, acc, frame, grid_mass, grid_mom, grid_force,\n"
+        "        copies_mass, copies_mom, copies_force, bad)",
         "m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =\n"
         "    sum_p m_p w b_p - V_p sigma_p grad w. bad[t]: first particle of block t outside the grid.\n\n"
-        "    variant: (support, affine, loaded) constants; particles: (x, v, C, mass, volume,\n"
-        "    stress, acc); frame: (lower, h, inv_h, cells, strides, offset); grid and copies:\n"
-        "    (mass, momentum, force) of the grid and of the other threads.",
+        "    variant: (support, affine, loaded) constants; frame: (lower, h, inv_h, cells,\n"
+        "    strides, offset); copies_*: the nodal arrays of the other threads.",
         ["support, affine_, loaded_ = variant",
-         "x, v, C, mass, volume, stress, acc = particles",
          "lower, h, inv_h, cells, strides, offset = frame",
-         "grid_mass, grid_mom, grid_force = grid",
-         "copies_mass, copies_mom, copies_force = copies",
          "threads = copies_mass.shape[0] + 1",
          "shared_acc = acc.shape[0] == 1"],
         ["S, affine, loaded = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2   # compile-time constants",
@@ -293,19 +290,17 @@ def _g2p_particle(dim: int) -> list[str]:
 
 def _g2p(dim: int) -> list[str]:
     return _shell(
-        "g2p(variant, particles, frame, grid, flip, dt, d_inv, copies_mom, bad)",
+        "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
+        "        flip, dt, d_inv, copies_mom, bad)",
         "USL: v_p (PIC/FLIP blend), C_p = B_p D_p^-1, x_p += dt v_pic, and L_p, F_p, V_p\n"
         "    from v_new. REMAP: v_p and C_p only, v_pic into `rate`, and the new momentum\n"
         "    m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:\n"
         "    L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.\n"
         "    bad[t]: first particle of block t whose J = det F is not positive.\n\n"
-        "    variant: (support, mode, affine, blend) constants; particles: (x, v, C, mass, L, F,\n"
-        "    volume, volume0, rate); frame: (lower, h, inv_h, cells, strides, offset); grid:\n"
-        "    (v_old, v_new, momentum); d_inv: D_p^-1 per axis (APIC).",
+        "    variant: (support, mode, affine, blend) constants; frame: (lower, h, inv_h, cells,\n"
+        "    strides, offset); d_inv: D_p^-1 per axis (APIC).",
         ["support, mode_, affine_, blend_ = variant",
-         "x, v, C, mass, L, F, volume, volume0, rate = particles",
          "lower, h, inv_h, cells, strides, offset = frame",
-         "v_old, v_new, grid_mom = grid",
          "threads = copies_mom.shape[0] + 1",
          "remaps = mode_.ndim - 1 == REMAP",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"],

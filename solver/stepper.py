@@ -244,9 +244,9 @@ class ExplicitMPM:
         bad = np.empty(self.threads, dtype=np.int64)
         fused.kernels(self.scene.dimension).p2g(
             (self._support, fused.constant(self.affine is not None), fused.constant(self.loads.any)),
-            (p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc),
+            p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc,
             (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset),
-            (g.mass, g.momentum, g.force), (c.mass, c.momentum, c.force), bad)
+            g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
         outside = threads.first_of(bad)
         if outside >= 0:
             self._fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -258,8 +258,8 @@ class ExplicitMPM:
         fused.kernels(self.scene.dimension).g2p(
             (self._support, fused.constant(mode), fused.constant(self.affine is not None),
              fused.constant(self.flip_ratio > 0.0)),
-            (p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume, p.volume0, self.rate),
-            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset), (g.v_old, g.v_new, g.momentum),
+            p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume, p.volume0, self.rate,
+            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset), g.v_old, g.v_new, g.momentum,
             self.flip_ratio, dt, d_inv, self.copies.momentum, bad)
         self._check_inversion(threads.first_of(bad))
 
