@@ -14,10 +14,12 @@ under the user's cache folder instead.
 
 The kernels do the floating-point operations of the hand-written ones in the
 same order, so the results are the same bits: the weight of node (i, j, k) is
-wx[i] * (wy[j] * wz[k]) with the product of the outer axes taken once per row,
-gradient component a the same product with g in place of w on axis a; sums run
-over the components in order (s00 * dwx + s01 * dwy + s02 * dwz); F is updated
-column by column (F <- F + dt L F).
+wx[i] * (wy[j] * wz[k]) with the product of the outer axes taken once per row
+(in 2D wx[i] * wy[j]), gradient component a the same product with g in place of
+w on axis a; sums run over the components in order (s00 * dwx + s01 * dwy + s02 *
+dwz); F is read whole, n_ab = f_ab + dt l_a0 f_0b + dt l_a1 f_1b + ... written
+back, and J = det n expanded along the first row as solver/kernels.py's
+`determinant` does.
 
 Names in the emitted code: axis a has the letter c = "xyz"[a] and the loop index
 "ijk"[a]; per axis i{c} (first node), f{c} (position in cells from it), w{c},
@@ -315,7 +317,7 @@ def _g2p(dim: int) -> list[str]:
 # -- the generated module ------------------------------------------------------------
 
 def source(dim: int) -> str:
-    """The text of the module of the fused kernels for `dim` dimensions."""
+    """The text of the module of the fused kernels for `dim` (2 or 3) dimensions."""
     return "\n".join([HEADER.format(dim=dim), *_p2g(dim), *_g2p(dim)]) + "\n"
 
 
@@ -347,7 +349,12 @@ def write(dim: int) -> Path:
 
 
 def load(dim: int):
-    """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
+    """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p).
+
+    It is registered in sys.modules before it runs: numba's cache records a parallel
+    kernel's module by name and imports it by that name when it loads the kernel
+    (a module not in sys.modules is recorded as '<dynamic>', and such cache entries
+    fail to load in a later process)."""
     name = f"solver._generated.fused_{dim}d"
     if name in sys.modules:
         return sys.modules[name]
