@@ -6,11 +6,14 @@ nested once per axis and every per-axis and per-component statement is written
 out: scalars only, the form the hand-written 2D and 3D kernels had (a kernel
 generic over the dimension, with per-axis data in small arrays, was measured
 slower; docs/internals.md). `load(dim)` writes that text to
-solver/_generated/fused_{dim}d.py (git-ignored) when it differs from what is
-there, and imports it; numba's cache (`cache=True`) keys on that file's path and
-modification time, so an unchanged template reuses the compiled kernels and a
-changed one recompiles once. Where the package folder is read-only the file goes
-under the user's cache folder instead.
+fused_{dim}d_<hash of the text>.py in the user's cache folder
+(~/.cache/mpm-solver/fused, else a folder in the system's temporary one) unless
+it is there already, and imports it; numba's cache (`cache=True`) keys on that
+file's path and modification time, so an unchanged template reuses the compiled
+kernels and a changed one compiles once into a new file. Nothing is written into
+the package (it may be read-only, and long generated functions do not belong
+beside the code that is read), and checkouts with different templates sharing a
+cache folder never rewrite each other's files.
 
 The kernels do the floating-point operations of the hand-written ones in the
 same order, so the results are the same bits: the weight of node (i, j, k) is
@@ -34,9 +37,11 @@ atomic adds in `_scatter` and its own shell.
 """
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 AXES = "xyz"
@@ -322,9 +327,10 @@ def source(dim: int) -> str:
 
 
 def _folders() -> list[Path]:
-    """Where a generated module may go: beside this package, else the user's cache."""
+    """Where a generated module may go: the user's cache, else the system's temporary folder."""
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return [Path(__file__).resolve().parent / "_generated", cache / "mpm-solver" / "fused"]
+    temporary = Path(tempfile.gettempdir()) / f"mpm-solver-{os.getuid() if hasattr(os, 'getuid') else 'user'}"
+    return [cache / "mpm-solver" / "fused", temporary / "fused"]
 
 
 def write(dim: int) -> Path:
@@ -333,8 +339,9 @@ def write(dim: int) -> Path:
     template does. Written to a temporary file and renamed: processes starting together
     each see a whole file."""
     text = source(dim)
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
     for folder in _folders():
-        path = folder / f"fused_{dim}d.py"
+        path = folder / f"fused_{dim}d_{digest}.py"
         try:
             if path.is_file() and path.read_text() == text:
                 return path
