@@ -220,11 +220,11 @@ SPEED = "/bodies/0/initial_velocity/0"  # the first disk's x velocity: each job 
 
 def test_a_sweep_page_shows_its_jobs_side_by_side_and_overlays_their_energies(page: Page, sdk, example,
                                                                                screenshot_dir):
-    scene = live_scenes.quick(example, "Stiffness sweep")
+    scene = live_scenes.quick(example, "Speed sweep")
     scene["time"]["end"] = 0.3
     sweep = sdk.sweep(scene, {SPEED: [0.05, 0.1, 0.2]})
     page.goto("/#/sweeps")
-    expect(page.locator(f"tr.sweep-row[data-id='{sweep.id}']")).to_contain_text("Stiffness sweep")
+    expect(page.locator(f"tr.sweep-row[data-id='{sweep.id}']")).to_contain_text("Speed sweep")
     page.locator(f"tr.sweep-row[data-id='{sweep.id}'] a").click()
     expect(page.locator("code.id")).to_have_text(sweep.id)
     rows = page.locator("tr.sweep-job")
