@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import importlib.util
 import sys
 import tempfile
@@ -83,10 +84,26 @@ class SoakStack(_bench.Stack):
 
     def kill_and_restart_redis(self) -> None:
         """SIGKILL to Redis, then start it again on its port with its append-only file
-        (what `mpm serve`'s supervisor does)."""
-        self.redis.process.kill()
-        self.redis.process.wait()
-        self.redis.restart()
+        (what `mpm serve`'s supervisor does). The new redis-server is started by a thread
+        that lives until the stack stops: it dies with the thread that started it
+        (PR_SET_PDEATHSIG), and the thread calling this one ends before the drain."""
+        done = threading.Event()
+
+        def keeper() -> None:
+            self.redis.process.kill()
+            self.redis.process.wait()
+            self.redis.restart()
+            done.set()
+            self.stopped.wait()
+
+        self.stopped = getattr(self, "stopped", threading.Event())
+        threading.Thread(target=keeper, name="redis-keeper", daemon=True).start()
+        done.wait()
+
+    def stop(self) -> None:
+        super().stop()
+        if hasattr(self, "stopped"):
+            self.stopped.set()
 
 
 def _post_retrying(api: httpx.Client, path: str, body: dict, tries: int = 60) -> httpx.Response:
@@ -188,7 +205,8 @@ def report(r: dict) -> str:
     for name in ("api", "redis"):
         start, end = r["memory_start"][name], r["memory_end"][name]
         growth = f"{100 * (end / start - 1):+.0f} %" if start and end else "-"
-        rows.append(f"| resident memory of {name}, start -> end | {start:.0f} MiB -> {end:.0f} MiB ({growth}) |")
+        rows.append(f"| resident memory of {name}, start -> end | {start or 0:.0f} MiB -> {end or 0:.0f} MiB "
+                    f"({growth}) |")
     workers = [k for k in r["memory_end"] if k.startswith("worker")]
     rows.append("| resident memory of the workers at start / at end (new processes) | "
                 + ", ".join(f"{r['memory_start'][k] or 0:.0f}" for k in workers) + " MiB / "
@@ -210,6 +228,7 @@ def main() -> int:
             result = soak(stack, args.minutes, args.jobs, args.rate, args.kill_every, args.job_seconds)
         finally:
             stack.stop()
+    print(json.dumps(result), file=sys.stderr, flush=True)  # the figures, whatever the report does
     print(report(result))
     return 0 if result["lost"] == 0 and result["failed"] == 0 else 1
 
