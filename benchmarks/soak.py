@@ -10,7 +10,8 @@ benchmarks/service.py): an embedded Redis, two workers (`mpm worker`) and the AP
 submitted evenly over the run while `GET /v1/jobs/{id}` is polled at --rate
 requests/s (open loop, see benchmarks/service.py); every --kill-every seconds one
 worker is killed with SIGKILL and a new one started (what `mpm serve`'s supervisor or
-a container restart policy does). At the end it waits for every job and reports
+a container restart policy does); half-way through, Redis is killed (SIGKILL) and
+started again once (submissions meanwhile are retried, as a client does on 503). At the end it waits for every job and reports
 jobs submitted / succeeded / failed / lost, the status-poll latency (p50, p99),
 job turnaround, and the resident memory of each long-lived process at start and end.
 """
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import importlib.util
 import sys
 import tempfile
@@ -58,8 +60,11 @@ class SoakStack(_bench.Stack):
     """benchmarks/service.py's stack (two workers, the API) whose workers are killed and replaced."""
 
     def __init__(self, data_dir: Path):
+        # The anonymous caller's quotas (MPM_QUOTA_*) apply here too: raised for the soak's backlog.
         super().__init__(data_dir, {"MPM_MAX_CONCURRENT_JOBS": "100000", "MPM_LEASE_SECONDS": "6",
-                                    "MPM_CHECKPOINT_SECONDS": "2"})
+                                    "MPM_CHECKPOINT_SECONDS": "2", "MPM_QUOTA_ACTIVE_JOBS": "100000",
+                                    "MPM_QUOTA_QUEUED_JOBS": "100000",
+                                    "MPM_QUOTA_PARTICLE_STEPS_PER_DAY": "1e18"})
         self.workers, self.api = self.processes[:2], self.processes[2]
         self.started_workers = len(self.workers)
 
@@ -77,12 +82,48 @@ class SoakStack(_bench.Stack):
         self.workers[index] = self.start("worker", "--no-warmup", "--name", f"soak{self.started_workers}@local")
         self.processes = [*self.workers, self.api]
 
+    def kill_and_restart_redis(self) -> None:
+        """SIGKILL to Redis, then start it again on its port with its append-only file
+        (what `mpm serve`'s supervisor does). The new redis-server is started by a thread
+        that lives until the stack stops: it dies with the thread that started it
+        (PR_SET_PDEATHSIG), and the thread calling this one ends before the drain."""
+        done = threading.Event()
+
+        def keeper() -> None:
+            self.redis.process.kill()
+            self.redis.process.wait()
+            self.redis.restart()
+            done.set()
+            self.stopped.wait()
+
+        self.stopped = getattr(self, "stopped", threading.Event())
+        threading.Thread(target=keeper, name="redis-keeper", daemon=True).start()
+        done.wait()
+
+    def stop(self) -> None:
+        super().stop()
+        if hasattr(self, "stopped"):
+            self.stopped.set()
+
+
+def _post_retrying(api: httpx.Client, path: str, body: dict, tries: int = 60) -> httpx.Response:
+    """A client's submission: a 503 (Redis restarting) or a lost connection is retried, 1 s apart."""
+    for _ in range(tries - 1):
+        try:
+            answer = api.post(path, json=body)
+            if answer.status_code != 503:
+                return answer
+        except httpx.TransportError:
+            pass
+        time.sleep(1.0)
+    return api.post(path, json=body)
+
 
 def soak(stack: SoakStack, minutes: float, jobs: int, rate: float, kill_every: float, end: float,
          drain_seconds: float = 600.0) -> dict:
     duration = minutes * 60.0
     submitted: list[str] = []
-    kills = 0
+    kills = redis_restarts = 0
     stop = threading.Event()
     memory_start = stack.memory()
 
@@ -93,15 +134,19 @@ def soak(stack: SoakStack, minutes: float, jobs: int, rate: float, kill_every: f
                 delay = start + k * duration / jobs - time.monotonic()
                 if stop.wait(max(0.0, delay)):
                     return
-                answer = api.post("/v1/jobs", json={"scene": scene(f"soak{k}", end=end)})
+                answer = _post_retrying(api, "/v1/jobs", {"scene": scene(f"soak{k}", end=end)})
                 answer.raise_for_status()
                 submitted.append(answer.json()["id"])
 
     def kill_periodically() -> None:
-        nonlocal kills
+        nonlocal kills, redis_restarts
+        started = time.monotonic()
         while not stop.wait(kill_every):
             stack.kill_and_replace_worker(kills % len(stack.workers))
             kills += 1
+            if redis_restarts == 0 and time.monotonic() - started >= duration / 2:
+                stack.kill_and_restart_redis()  # once, half-way
+                redis_restarts += 1
 
     submitter = threading.Thread(target=submit_evenly)
     killer = threading.Thread(target=kill_periodically)
@@ -120,7 +165,11 @@ def soak(stack: SoakStack, minutes: float, jobs: int, rate: float, kill_every: f
         deadline = time.monotonic() + drain_seconds  # a job not finished by then counts as lost
         for job_id in submitted:
             while time.monotonic() < deadline:
-                record = api.get(f"/v1/jobs/{job_id}")
+                try:
+                    record = api.get(f"/v1/jobs/{job_id}")
+                except httpx.TransportError:
+                    time.sleep(1.0)
+                    continue
                 if record.status_code == 200 and record.json()["status"] in FINISHED:
                     finals[job_id] = record.json()
                     break
@@ -128,7 +177,7 @@ def soak(stack: SoakStack, minutes: float, jobs: int, rate: float, kill_every: f
     memory_end = stack.memory()
     turnaround = [seconds_between(j["created_at"], j["finished_at"]) for j in finals.values()]
     return {
-        "minutes": minutes, "kills": kills, "submitted": len(submitted),
+        "minutes": minutes, "kills": kills, "redis_restarts": redis_restarts, "submitted": len(submitted),
         "succeeded": sum(j["status"] == "succeeded" for j in finals.values()),
         "failed": sum(j["status"] == "failed" for j in finals.values()),
         "lost": len(submitted) - len(finals),
@@ -143,7 +192,8 @@ def soak(stack: SoakStack, minutes: float, jobs: int, rate: float, kill_every: f
 
 def report(r: dict) -> str:
     rows = [
-        f"| run | {r['minutes']:g} min, {r['kills']} workers killed (kill -9) |",
+        f"| run | {r['minutes']:g} min, {r['kills']} workers killed (kill -9), Redis killed (kill -9) "
+        f"and restarted {r['redis_restarts']} time(s) |",
         f"| jobs submitted / succeeded / failed / lost | {r['submitted']} / {r['succeeded']} / "
         f"{r['failed']} / {r['lost']} |",
         f"| jobs whose run was lost and resumed | {r['resumed']} |",
@@ -155,7 +205,8 @@ def report(r: dict) -> str:
     for name in ("api", "redis"):
         start, end = r["memory_start"][name], r["memory_end"][name]
         growth = f"{100 * (end / start - 1):+.0f} %" if start and end else "-"
-        rows.append(f"| resident memory of {name}, start -> end | {start:.0f} MiB -> {end:.0f} MiB ({growth}) |")
+        rows.append(f"| resident memory of {name}, start -> end | {start or 0:.0f} MiB -> {end or 0:.0f} MiB "
+                    f"({growth}) |")
     workers = [k for k in r["memory_end"] if k.startswith("worker")]
     rows.append("| resident memory of the workers at start / at end (new processes) | "
                 + ", ".join(f"{r['memory_start'][k] or 0:.0f}" for k in workers) + " MiB / "
@@ -177,6 +228,7 @@ def main() -> int:
             result = soak(stack, args.minutes, args.jobs, args.rate, args.kill_every, args.job_seconds)
         finally:
             stack.stop()
+    print(json.dumps(result), file=sys.stderr, flush=True)  # the figures, whatever the report does
     print(report(result))
     return 0 if result["lost"] == 0 and result["failed"] == 0 else 1
 

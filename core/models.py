@@ -58,17 +58,49 @@ class JobRecord(JobFields):
     worker: str | None = None
     lost: int = 0                  # runs lost with their worker or solver process
     dt: float | None = None        # the latest time step
+    # Given at submission (absent otherwise).
+    callback_url: str | None = None  # the final record is POSTed there (worker/webhooks.py)
+    sweep: str | None = None         # the sweep the job belongs to
+    parameters: dict[str, Any] | None = None  # a sweep's job: its values, by JSON pointer
 
 
 RECORD_FIELDS = frozenset(JobRecord.model_fields)
 
 
 def new_job(job_id: str, owner: str | None, *, name: str | None, end_time: float | None,
-            processes: int, summary: dict[str, Any]) -> dict[str, Any]:
-    """The record of a job as it is submitted: queued, nothing run yet."""
+            processes: int, summary: dict[str, Any], **given: Any) -> dict[str, Any]:
+    """The record of a job as it is submitted: queued, nothing run yet; `given`: the
+    submission's optional fields (callback_url, sweep, parameters) that are not None."""
     record = JobRecord(
         id=job_id, name=name, status="queued", created_at=now_iso(), started_at=None,
         finished_at=None, progress=0.0, step=0, sim_time=0.0, end_time=end_time,
         steps_per_second=None, eta_seconds=None, energies={"kinetic": 0.0, "strain": 0.0, "total": 0.0},
-        error=None, processes=processes, summary=summary, owner=owner, cancel_requested=False, attempts=0)
+        error=None, processes=processes, summary=summary, owner=owner, cancel_requested=False, attempts=0,
+        **{key: value for key, value in given.items() if value is not None})
     return record.model_dump(exclude_unset=True)  # not the worker's fields: they come when it runs
+
+
+SweepMode = Literal["grid", "zip"]
+
+
+class SweepJob(BaseModel):
+    id: str
+    parameters: dict[str, Any]   # JSON pointer -> the value this job has there
+
+
+class SweepRecord(BaseModel):
+    """A sweep: one job per combination of parameter values (service/sweeps.py). Its
+    jobs are ordinary jobs (with `sweep` and `parameters` in their records); the sweep
+    keeps which they are, in combination order. Stored as a Redis hash like a job."""
+    id: str
+    name: str | None
+    owner: str | None
+    created_at: str
+    mode: SweepMode
+    parameters: dict[str, list[Any]]   # JSON pointer -> its values, as submitted
+    jobs: list[SweepJob]
+    callback_url: str | None = None    # the sweep's record is POSTed there when its last job ends
+    notified_at: str | None = None     # when that delivery was first queued (only one is)
+
+
+SWEEP_FIELDS = frozenset(SweepRecord.model_fields)

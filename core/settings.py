@@ -54,6 +54,15 @@ class Settings(BaseSettings):
     max_total_bytes: int = Field(500 * 2**30, gt=0, description="size limit of all jobs' folders")
     retention_days: float = Field(30.0, ge=0, description="finished jobs older than this are deleted "
                                                            "with their files (0: kept for ever)")
+    min_free_bytes: int = Field(2**30, ge=0, description="a job is not admitted while the data folder's "
+                                                         "file system has less free space than this")
+
+    # Webhooks (worker/webhooks.py): a job's or a sweep's final record POSTed to its callback_url.
+    webhook_secret: str | None = Field(None, description="key of the X-MPM-Signature HMAC-SHA256; "
+                                                         "unset: callback_url is refused")
+    webhook_allow: str = Field("127.0.0.0/8,::1,localhost",
+                               description="comma-separated networks (CIDR) and host names a "
+                                           "callback_url may point to; default: loopback only")
 
     log_level: str = "INFO"
 

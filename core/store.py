@@ -17,11 +17,12 @@ from typing import Any, Iterable
 
 import redis
 
-from core.models import ACTIVE, FINISHED, RECORD_FIELDS, now_iso
+from core.models import ACTIVE, FINISHED, RECORD_FIELDS, SWEEP_FIELDS, now_iso
 
 PREFIX = "mpm:"
 ALL_INDEX = PREFIX + "jobs"
 WORKERS = PREFIX + "workers"
+WEBHOOKS = PREFIX + "webhooks"  # deliveries due (core/webhooks.py)
 # A worker beats every HEARTBEAT_INTERVAL seconds (worker/heartbeat.py); one not heard
 # from for HEARTBEAT_MAX_AGE is taken as gone (`/readyz` counts the others).
 HEARTBEAT_INTERVAL = 2.0
@@ -46,6 +47,15 @@ def usage_key(owner: str, day: str) -> str:
     return f"{PREFIX}owner:{owner}:usage:{day}"
 
 
+def sweep_key(sweep_id: str) -> str:
+    return f"{PREFIX}sweep:{sweep_id}"
+
+
+def sweeps_index(owner: str | None) -> str:
+    """Sweeps by creation time: all of them, or one owner's."""
+    return f"{PREFIX}owner:{owner}:sweeps" if owner else f"{PREFIX}sweeps"
+
+
 def lease_key(job_id: str) -> str:
     return f"{PREFIX}job:{job_id}:lease"
 
@@ -55,40 +65,58 @@ def today() -> str:
     return datetime.now(timezone.utc).date().isoformat()
 
 
-# KEYS: job, all index, queued index, running index, owner index, owner's usage today.
-# ARGV: id, score, max_active, owner (JSON-encoded; '' for none), owner's max active,
-# owner's max queued, cost, owner's max cost a day, then field/value pairs.
-# Returns '' when stored, else the limit that refused it (nothing is stored then).
+# KEYS: all index, queued index, running index, owner index, owner's usage today, sweep,
+# sweeps index, owner's sweeps index, then one key per job.
+# ARGV: score, max_active, owner (JSON-encoded: 'null' for the anonymous caller), quota ('1'
+# to check it), owner's max active, owner's max queued, cost of all the jobs, owner's max
+# cost a day, sweep id ('' for none), the sweep's pair count, its field/value pairs, then
+# per job: id, pair count, field/value pairs.
+# Returns '' when all are stored, else the limit that refused them (nothing is stored then).
 _CREATE = """
-local queued = redis.call('ZRANGE', KEYS[3], 0, -1)
-local running = redis.call('ZRANGE', KEYS[4], 0, -1)
-if #queued + #running >= tonumber(ARGV[3]) then return 'max_active' end
-if ARGV[4] ~= '' then
-  local prefix = string.sub(KEYS[1], 1, #KEYS[1] - #ARGV[1])
+local n = #KEYS - 8
+local queued = redis.call('ZRANGE', KEYS[2], 0, -1)
+local running = redis.call('ZRANGE', KEYS[3], 0, -1)
+if #queued + #running + n > tonumber(ARGV[2]) then return 'max_active' end
+local sweep_pairs = tonumber(ARGV[10])
+local first = 11 + sweep_pairs
+if ARGV[4] == '1' then
+  local prefix = string.sub(KEYS[9], 1, #KEYS[9] - #ARGV[first])
   local mine_queued, mine_running = 0, 0
   for _, id in ipairs(queued) do
-    if redis.call('HGET', prefix .. id, 'owner') == ARGV[4] then mine_queued = mine_queued + 1 end
+    if redis.call('HGET', prefix .. id, 'owner') == ARGV[3] then mine_queued = mine_queued + 1 end
   end
   for _, id in ipairs(running) do
-    if redis.call('HGET', prefix .. id, 'owner') == ARGV[4] then mine_running = mine_running + 1 end
+    if redis.call('HGET', prefix .. id, 'owner') == ARGV[3] then mine_running = mine_running + 1 end
   end
-  if mine_queued + mine_running >= tonumber(ARGV[5]) then return 'owner_active' end
-  if mine_queued >= tonumber(ARGV[6]) then return 'owner_queued' end
-  local used = tonumber(redis.call('GET', KEYS[6]) or '0')
+  if mine_queued + mine_running + n > tonumber(ARGV[5]) then return 'owner_active' end
+  if mine_queued + n > tonumber(ARGV[6]) then return 'owner_queued' end
+  local used = tonumber(redis.call('GET', KEYS[5]) or '0')
   if used + tonumber(ARGV[7]) > tonumber(ARGV[8]) then return 'owner_daily' end
-  redis.call('INCRBY', KEYS[6], ARGV[7])  -- not INCRBYFLOAT: Redis 6.2 crashes logging it to the AOF
-  redis.call('EXPIRE', KEYS[6], 2 * 86400)
-  redis.call('ZADD', KEYS[5], ARGV[2], ARGV[1])
+  redis.call('INCRBY', KEYS[5], ARGV[7])  -- not INCRBYFLOAT: Redis 6.2 crashes logging it to the AOF
+  redis.call('EXPIRE', KEYS[5], 2 * 86400)
 end
-redis.call('HSET', KEYS[1], unpack(ARGV, 9))
-redis.call('ZADD', KEYS[2], ARGV[2], ARGV[1])
-redis.call('ZADD', KEYS[3], ARGV[2], ARGV[1])
+local score = tonumber(ARGV[1])
+local i = first
+for j = 1, n do
+  local id, count = ARGV[i], tonumber(ARGV[i + 1])
+  redis.call('HSET', KEYS[8 + j], unpack(ARGV, i + 2, i + 1 + count))
+  redis.call('ZADD', KEYS[1], score + j - 1, id)
+  redis.call('ZADD', KEYS[2], score + j - 1, id)
+  if ARGV[3] ~= 'null' then redis.call('ZADD', KEYS[4], score + j - 1, id) end
+  i = i + 2 + count
+end
+if ARGV[9] ~= '' then
+  redis.call('HSET', KEYS[6], unpack(ARGV, 11, 10 + sweep_pairs))
+  redis.call('ZADD', KEYS[7], score, ARGV[9])
+  if ARGV[3] ~= 'null' then redis.call('ZADD', KEYS[8], score, ARGV[9]) end
+end
 return ''
 """
 
-# KEYS: job, all index. ARGV: id, status-index prefix, new status, allowed statuses
-# (space separated), then field/value pairs. Returns the status before (nil: no job);
-# the change is made only when that status was allowed.
+# KEYS: job, all index, webhook queue. ARGV: id, status-index prefix, new status, allowed
+# statuses (space separated), then field/value pairs. Returns the status before (nil: no
+# job); the change is made only when that status was allowed. A job that ends with a
+# callback_url (or in a sweep) gets its delivery queued here (core/webhooks.py).
 _TRANSITION = """
 local raw = redis.call('HGET', KEYS[1], 'status')
 if not raw then return nil end
@@ -102,6 +130,15 @@ if ARGV[3] ~= current then
   redis.call('ZREM', ARGV[2] .. current, ARGV[1])
   redis.call('ZADD', ARGV[2] .. ARGV[3], score, ARGV[1])
   redis.call('HSET', KEYS[1], 'status', cjson.encode(ARGV[3]))
+  if ARGV[3] == 'succeeded' or ARGV[3] == 'failed' or ARGV[3] == 'cancelled' then
+    local t = redis.call('TIME')
+    local callback = redis.call('HGET', KEYS[1], 'callback_url')
+    if callback and callback ~= 'null' then redis.call('ZADD', KEYS[3], t[1], 'job|' .. ARGV[1] .. '|1') end
+    local sweep = redis.call('HGET', KEYS[1], 'sweep')
+    if sweep and sweep ~= 'null' then
+      redis.call('ZADD', KEYS[3], t[1], 'sweep|' .. cjson.decode(sweep) .. '|1')
+    end
+  end
 end
 return current
 """
@@ -163,11 +200,12 @@ return out
 
 @dataclass(frozen=True)
 class OwnerQuota:
-    """What one owner may have at once, and submit in a day (checked with the job's creation)."""
-    owner: str
+    """What one owner (None: the anonymous caller of a service without tokens) may have
+    at once, and submit in a day (checked with the jobs' creation)."""
+    owner: str | None
     max_active: int      # queued + running
     max_queued: int
-    cost: int            # what this job is charged: particles x estimated steps
+    cost: int            # what these jobs are charged: particles x estimated steps
     max_daily_cost: float
 
 
@@ -215,10 +253,10 @@ class JobStore:
     # -- records ---------------------------------------------------------------
 
     @staticmethod
-    def _pairs(fields: dict[str, Any]) -> list[str]:
-        unknown = fields.keys() - RECORD_FIELDS
+    def _pairs(fields: dict[str, Any], known: frozenset[str] = RECORD_FIELDS) -> list[str]:
+        unknown = fields.keys() - known
         if unknown:
-            raise ValueError(f"not fields of a job record (core.models.JobRecord): {sorted(unknown)}")
+            raise ValueError(f"not fields of a record (core.models): {sorted(unknown)}")
         out: list[str] = []
         for name, value in fields.items():
             out += [name, json.dumps(value)]
@@ -238,15 +276,28 @@ class JobStore:
         """Store a new queued job (of `quota.owner`, charged `quota.cost` today) unless a
         limit refuses it. Returns None, or which limit: "max_active" (the service's),
         "owner_active", "owner_queued" or "owner_daily"."""
+        return self.admit_all({job_id: fields}, max_active, quota)
+
+    def admit_all(self, jobs: dict[str, dict[str, Any]], max_active: int, quota: OwnerQuota | None = None,
+                  sweep: dict[str, Any] | None = None) -> str | None:
+        """Store the jobs {id: fields} (and the sweep record they make, if any), all or none:
+        the limits count every one of them. Returns None or the limit, as `admit`."""
         owner = quota.owner if quota else None
-        fields = {**fields, "id": job_id, "status": "queued", "owner": owner}
         score = time.time_ns() // 1000
-        limits = ([json.dumps(owner), quota.max_active, quota.max_queued, quota.cost,
-                   repr(float(quota.max_daily_cost))] if quota else ["", 0, 0, 0, 0])
+        limits = (["1", quota.max_active, quota.max_queued, quota.cost, repr(float(quota.max_daily_cost))]
+                  if quota else ["0", 0, 0, 0, 0])
+        sweep_pairs = self._pairs(sweep, SWEEP_FIELDS) if sweep else []
+        args: list[Any] = [score, max_active, json.dumps(owner), *limits,
+                           sweep["id"] if sweep else "", len(sweep_pairs), *sweep_pairs]
+        for job_id, fields in jobs.items():
+            pairs = self._pairs({**fields, "id": job_id, "status": "queued", "owner": owner})
+            args += [job_id, len(pairs), *pairs]
+        sweep_id = sweep["id"] if sweep else "-"
         refused = self._create(
-            keys=[job_key(job_id), ALL_INDEX, status_index("queued"), status_index("running"),
-                  owner_index(owner or ""), usage_key(owner or "", today())],
-            args=[job_id, score, max_active, *limits, *self._pairs(fields)])
+            keys=[ALL_INDEX, status_index("queued"), status_index("running"), owner_index(owner or ""),
+                  usage_key(owner or "", today()), sweep_key(sweep_id), sweeps_index(None),
+                  sweeps_index(owner), *map(job_key, jobs)],
+            args=args)
         return refused or None
 
     def usage_today(self, owner: str) -> float:
@@ -262,7 +313,7 @@ class JobStore:
         Returns the status before the call (None: no such job); the caller compares
         it with `allowed` to know whether the change was made."""
         return self._transition(
-            keys=[job_key(job_id), ALL_INDEX],
+            keys=[job_key(job_id), ALL_INDEX, WEBHOOKS],
             args=[job_id, PREFIX + "jobs:", to, " ".join(allowed), *self._pairs(fields)])
 
     def update_running(self, job_id: str, **fields: Any) -> bool:
@@ -331,6 +382,42 @@ class JobStore:
         if after:
             rows = [r for r in rows if (r[1], r[0]) < after]
         return rows[:count]
+
+    # -- sweeps ------------------------------------------------------------------
+
+    def get_sweep(self, sweep_id: str) -> dict[str, Any] | None:
+        return self.decode(self.redis.hgetall(sweep_key(sweep_id)))
+
+    def sweep_ids(self, owner: str | None, limit: int) -> list[str]:
+        """The newest `limit` sweeps (of `owner` when given)."""
+        return self.redis.zrevrange(sweeps_index(owner), 0, limit - 1)
+
+    def jobs(self, job_ids: list[str]) -> list[dict[str, Any] | None]:
+        """Several records in one round trip (None where a job is gone)."""
+        pipe = self.redis.pipeline(transaction=False)
+        for job_id in job_ids:
+            pipe.hgetall(job_key(job_id))
+        return [self.decode(raw) for raw in pipe.execute()]
+
+    def delete_sweep(self, sweep_id: str, owner: str | None) -> None:
+        """The sweep's record (its jobs are deleted one by one, as any job)."""
+        pipe = self.redis.pipeline()
+        pipe.delete(sweep_key(sweep_id))
+        pipe.zrem(sweeps_index(None), sweep_id)
+        if owner:
+            pipe.zrem(sweeps_index(owner), sweep_id)
+        pipe.execute()
+
+    def ids_with_prefix(self, prefix: str, owner: str | None, limit: int = 2) -> list[str]:
+        """Up to `limit` job ids starting with `prefix` (hex digits and dashes only: checked
+        by the caller), of `owner` when given; ZSCAN matches on the Redis side."""
+        found: list[str] = []
+        for job_id, _ in self.redis.zscan_iter(owner_index(owner) if owner else ALL_INDEX,
+                                               match=f"{prefix}*", count=1000):
+            found.append(job_id)
+            if len(found) >= limit:
+                break
+        return found
 
     # -- the lease of a running job ----------------------------------------------
 

@@ -10,7 +10,7 @@ from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
-from service import errors, health, jobs, scenes
+from service import errors, health, jobs, scenes, sweeps
 from service.auth import TokenAuth, load_tokens
 from service.body_limit import BodySizeLimit
 from service.json_depth import JsonDepthLimit
@@ -50,8 +50,10 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     origins = [origin.strip() for origin in settings.cors_origins.split(",") if origin.strip()]
     if origins:
         app.add_middleware(CORSMiddleware, allow_origins=origins, allow_methods=["GET", "POST", "DELETE"],
-                           allow_headers=["Authorization", "Content-Type"], max_age=600)
+                           allow_headers=["Authorization", "Content-Type"], max_age=600,
+                           expose_headers=["X-MPM-Next-Line", "X-MPM-Job-Status"])
     app.include_router(jobs.router)
+    app.include_router(sweeps.router)
     app.include_router(scenes.router)
     app.include_router(health.router)
     if (DASHBOARD / "index.html").is_file():

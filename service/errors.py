@@ -16,7 +16,7 @@ log = logging.getLogger("mpm.api")
 
 _CODES = {400: "bad_request", 401: "unauthorized", 403: "forbidden", 404: "not_found",
           405: "method_not_allowed", 409: "conflict", 413: "too_large", 422: "validation_failed",
-          429: "too_many_jobs", 503: "unavailable"}
+          429: "too_many_jobs", 503: "unavailable", 507: "insufficient_storage"}
 
 
 class ErrorDetail(BaseModel):

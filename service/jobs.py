@@ -4,12 +4,14 @@ from __future__ import annotations
 import json
 import logging
 import shutil
+from dataclasses import dataclass
 from typing import Any
 
 from fastapi import APIRouter, Depends, Query, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
+from core import webhooks
 from core.celery_app import enqueue
 from core.models import FINISHED, STATUSES, JobFields, Status, new_job
 from core.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
@@ -18,6 +20,7 @@ from service import quotas, results
 from service.auth import caller, owns
 from service.errors import ApiError, documented, validation_error
 from service.scenes import check_scene, granted_processes
+from service.settings import ApiSettings
 from service.state import Services, services
 
 log = logging.getLogger("mpm.api")
@@ -30,6 +33,9 @@ class JobRequest(BaseModel):
     model_config = ConfigDict(extra="forbid")
     scene: dict[str, Any] = Field(description="the scene document (see GET /v1/schema/scene)")
     processes: int | None = Field(None, ge=1, description="processes to run it on; capped by the service")
+    callback_url: str | None = Field(None, max_length=2000,
+                                     description="the final job record is POSTed there, signed "
+                                                 "(X-MPM-Signature); allowed hosts: MPM_WEBHOOK_ALLOW")
 
 
 class Job(JobFields):
@@ -69,45 +75,93 @@ def _record(svc: Services, job_id: str, owner: str | None) -> dict[str, Any]:
     return record
 
 
+@dataclass
+class NewJob:
+    """A validated job, not stored yet: its scene file's text and its record."""
+    id: str
+    scene_json: str
+    record: dict[str, Any]
+
+
+def new_job_from(scene_document: dict[str, Any], requested_processes: int | None, owner: str | None,
+                 settings: ApiSettings, **given: Any) -> NewJob:
+    """Validate the scene (422 with every error) and make the job's record; `given`: the
+    record's optional fields (callback_url, sweep, parameters)."""
+    scene_json, summary = check_scene(scene_document, settings)
+    scene = json.loads(scene_json)
+    job_id = new_job_id()
+    record = new_job(job_id, owner, name=scene.get("name"), end_time=scene.get("time", {}).get("end"),
+                     processes=granted_processes(requested_processes, scene, settings), summary=summary, **given)
+    return NewJob(job_id, scene_json, record)
+
+
+def store_and_enqueue(svc: Services, owner: str | None, jobs: list[NewJob],
+                      sweep: dict[str, Any] | None = None) -> None:
+    """Admit the jobs (disk, quotas: all or none), write their scene files and queue them.
+    Anything refused or failing leaves no trace: no record, no folder, nothing queued."""
+    quotas.check_disk(svc.disk, svc.settings)
+    quota = quotas.owner_quota(owner, [job.record["summary"] for job in jobs], svc.settings)
+    folders = [JobFiles(svc.settings.jobs_dir, job.id) for job in jobs]
+    try:
+        for job, files in zip(jobs, folders):
+            files.dir.mkdir(parents=True)
+            files.scene.write_text(job.scene_json, encoding="utf-8")
+        quotas.admit(svc.store, {job.id: job.record for job in jobs}, quota, svc.settings, sweep)
+        try:
+            for job in jobs:
+                enqueue(svc.celery, job.id)
+        except Exception:
+            for job in jobs:
+                svc.store.delete(job.id, allowed=STATUSES)
+            if sweep:
+                svc.store.delete_sweep(sweep["id"], owner)
+            raise
+    except BaseException:
+        for files in folders:
+            shutil.rmtree(files.dir, ignore_errors=True)
+        raise
+
+
+def checked_callback(url: str | None, settings: ApiSettings, path: str = "callback_url") -> str | None:
+    """The callback URL if the settings allow it; 422 naming the rule otherwise."""
+    if url is None:
+        return None
+    try:
+        return webhooks.check_url(url, settings)
+    except webhooks.WebhookUrlError as exc:
+        raise validation_error([{"path": path, "message": str(exc)}]) from None
+
+
 @router.post("", status_code=202, response_model=Job,
              responses=documented({413: "request over MPM_MAX_BODY_BYTES",
                                    422: "every validation error, path and message",
                                    429: "over MPM_MAX_CONCURRENT_JOBS or one of the caller's quotas "
-                                        "(details.limit names it; Retry-After)"}))
+                                        "(details.limit names it; Retry-After)",
+                                   507: "the disk budget is spent (MPM_MAX_TOTAL_BYTES, MPM_MIN_FREE_BYTES)"}))
 def submit_job(body: JobRequest, svc: Services = Depends(services),
                owner: str | None = Depends(caller)) -> dict[str, Any]:
     """Validate the scene, store the job and put it on the queue. A rejected job leaves no trace."""
-    scene_json, summary = check_scene(body.scene, svc.settings)
-    scene = json.loads(scene_json)
-    processes = granted_processes(body.processes, scene, svc.settings)
-    quota = quotas.owner_quota(owner, summary, svc.settings)
-    job_id = new_job_id()
-    files = JobFiles(svc.settings.jobs_dir, job_id)
-    files.dir.mkdir(parents=True)
-    try:
-        files.scene.write_text(scene_json, encoding="utf-8")
-        record = new_job(job_id, owner, name=scene.get("name"), end_time=scene.get("time", {}).get("end"),
-                         processes=processes, summary=summary)
-        quotas.admit(svc.store, job_id, record, quota, svc.settings)
-        try:
-            enqueue(svc.celery, job_id)
-        except Exception:
-            svc.store.delete(job_id, allowed=STATUSES)
-            raise
-    except BaseException:
-        shutil.rmtree(files.dir, ignore_errors=True)
-        raise
-    log.info("job submitted", extra={"job_id": job_id, "job_name": record["name"],
-                                     "particles": summary.get("particles")})
+    callback_url = checked_callback(body.callback_url, svc.settings)
+    job = new_job_from(body.scene, body.processes, owner, svc.settings, callback_url=callback_url)
+    store_and_enqueue(svc, owner, [job])
+    log.info("job submitted", extra={"job_id": job.id, "job_name": job.record["name"],
+                                     "particles": job.record["summary"].get("particles")})
     # The job as accepted; a worker may already have started it (GET shows that).
-    return public(record)
+    return public(job.record)
 
 
 @router.get("", response_model=JobList)
 def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500),
-              cursor: str | None = None, svc: Services = Depends(services),
-              owner: str | None = Depends(caller)) -> dict[str, Any]:
-    """The caller's jobs, newest first; pass `next_cursor` back as `cursor` for the next page."""
+              cursor: str | None = None,
+              id_prefix: str | None = Query(None, pattern=r"^[0-9a-f-]{1,36}$",
+                                            description="only jobs whose id starts so (at most `limit`)"),
+              svc: Services = Depends(services), owner: str | None = Depends(caller)) -> dict[str, Any]:
+    """The caller's jobs, newest first; pass `next_cursor` back as `cursor` for the next page.
+    With `id_prefix`: the jobs whose id starts with it (clients resolve a short id so)."""
+    if id_prefix is not None:
+        found = svc.store.jobs(svc.store.ids_with_prefix(id_prefix, owner, limit))
+        return {"jobs": [public(job) for job in found if job and (status is None or job["status"] == status)],
+                "next_cursor": None}
     try:
         page = svc.store.list(status, limit, cursor, owner=owner)
     except CursorError as exc:
@@ -156,9 +210,13 @@ def delete_job(job_id: str, svc: Services = Depends(services),
     if status not in FINISHED:
         raise ApiError(409, "job_not_finished", f"job {job_id} is {status}; cancel it first",
                        {"status": status})
-    shutil.rmtree(JobFiles(svc.settings.jobs_dir, job_id).dir, ignore_errors=True)
+    remove_files(svc, job_id)
     log.info("job deleted", extra={"job_id": job_id})
     return Response(status_code=204)
+
+
+def remove_files(svc: Services, job_id: str) -> None:
+    shutil.rmtree(JobFiles(svc.settings.jobs_dir, job_id).dir, ignore_errors=True)
 
 
 def _result_files(svc: Services, job_id: str, owner: str | None,
@@ -219,3 +277,31 @@ def get_scene(job_id: str, svc: Services = Depends(services),
         return json.loads(JobFiles(svc.settings.jobs_dir, job_id).scene.read_text(encoding="utf-8"))
     except FileNotFoundError:  # the folder was removed by hand
         raise ApiError(404, "not_found", f"job {job_id} has no scene file") from None
+
+
+MAX_LOG_LINES = 5000
+
+
+@router.get("/{job_id}/log", response_class=Response,
+            responses={200: {"content": {"text/plain": {}},
+                             "description": "the lines; X-MPM-Next-Line: the `since` of the next call"}})
+def get_log(job_id: str, since: int = Query(0, ge=0, le=10**9), limit: int = Query(MAX_LOG_LINES, ge=1,
+                                                                                         le=MAX_LOG_LINES),
+            svc: Services = Depends(services), owner: str | None = Depends(caller)) -> Response:
+    """The solver's log lines from line `since` (0: the first), at most `limit`; while
+    the job runs, call again with X-MPM-Next-Line for the lines written since."""
+    job_id = _job_id(job_id)
+    status = _record(svc, job_id, owner)["status"]
+    lines: list[str] = []
+    try:
+        with open(JobFiles(svc.settings.jobs_dir, job_id).log, encoding="utf-8", errors="replace") as log_file:
+            for number, line in enumerate(log_file):
+                if number >= since + limit or not line.endswith("\n"):  # a line being written waits
+                    break
+                if number >= since:
+                    lines.append(line)
+    except FileNotFoundError:  # not started yet
+        pass
+    return Response("".join(lines), media_type="text/plain; charset=utf-8",
+                    headers={"X-MPM-Next-Line": str(since + len(lines)), "X-MPM-Job-Status": status,
+                             "Cache-Control": "no-store"})

@@ -25,6 +25,7 @@ class ApiSettings(Settings):
     max_steps: int = Field(10_000_000, gt=0)
     max_body_bytes: int = Field(1_000_000, gt=0, description="largest accepted request body")
     max_concurrent_jobs: int = Field(1000, gt=0, description="queued + running jobs; more answer 429")
+    max_sweep_jobs: int = Field(1000, gt=0, description="jobs (combinations) one sweep may make")
     max_processes: int = Field(default_factory=lambda: os.cpu_count() or 1, gt=0,
                                description="the most processes (MPI ranks) one job may use; default: the CPUs")
 

@@ -9,6 +9,7 @@ from celery import Celery
 from fastapi import Request
 
 from core.celery_app import make_celery
+from core.disk import DiskUsage
 from core.store import JobStore
 from service.settings import ApiSettings
 
@@ -20,13 +21,14 @@ class Services:
     celery: Celery
     # For the hottest route (a job's status, polled by every client): no thread hop.
     async_redis: redis.asyncio.Redis
+    disk: DiskUsage  # the jobs' folders, measured for each admission (at most every few seconds)
 
     @classmethod
     def connect(cls, settings: ApiSettings) -> "Services":
         options = dict(decode_responses=True, socket_timeout=5, health_check_interval=30)
         client = redis.Redis.from_url(settings.redis_url, **options)
         return cls(settings, JobStore(client), make_celery(settings),
-                   redis.asyncio.Redis.from_url(settings.redis_url, **options))
+                   redis.asyncio.Redis.from_url(settings.redis_url, **options), DiskUsage(settings.jobs_dir))
 
     async def close(self) -> None:
         self.store.redis.close()

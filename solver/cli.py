@@ -222,8 +222,15 @@ def register_validate(subparsers) -> None:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    from solver.scene import MACHINE_LIMITS, SceneError, load_scene
+
     scene = _load(args.scene)
     if scene is None:
+        return EXIT_INVALID
+    try:
+        load_scene(scene, limits=MACHINE_LIMITS)
+    except SceneError as error:
+        _print_scene_errors(args.scene, error)
         return EXIT_INVALID
     from solver.summary import summarize
 

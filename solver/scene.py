@@ -772,6 +772,11 @@ class Limits:
     max_steps: int | None = None
 
 
+# What one machine could hold at all: `mpm validate` checks these before counting, so an
+# absurd scene (a 1 m grid of 1 nm cells) is refused at once rather than counted for ever.
+MACHINE_LIMITS = Limits(max_particles=10**8, max_grid_nodes=10**9)
+
+
 def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None) -> Scene:
     """Validate a scene given as a path to a JSON file, JSON text, a dict or a Scene.
 
@@ -892,9 +897,19 @@ def _message(error: dict) -> str:
     return message.replace("Input should be", "must be")
 
 
+# Counting a scene's particles tests each candidate position against each primitive
+# shape of its body's geometry; a scene needing more than this many tests per allowed
+# particle (a few tenths of a second for the default MPM_MAX_PARTICLES) is refused from
+# arithmetic alone, before anything is counted or allocated.
+COUNT_FACTOR = 8
+
+
 def _limit_problems(scene: Scene, limits: Limits) -> list[tuple[str, str]]:
+    """Every limit decided before any loop or allocation proportional to the scene's size:
+    nodes and steps from arithmetic, particles from the candidates' count (arithmetic),
+    counted only when that is within COUNT_FACTOR times the limit."""
     # Imported here: summary and seeding read the Scene defined in this module.
-    from solver.seeding import count_particles
+    from solver.seeding import count_candidates, count_particles
     from solver.summary import estimate_steps
 
     problems = []
@@ -907,7 +922,13 @@ def _limit_problems(scene: Scene, limits: Limits) -> list[tuple[str, str]]:
         if steps > limits.max_steps:
             problems.append(("time", f"about {steps} time steps, over the limit of {limits.max_steps}"))
     if limits.max_particles is not None:
-        particles = sum(count_particles(scene, stop_above=limits.max_particles))
-        if particles > limits.max_particles:
-            problems.append(("bodies", f"more particles than the limit of {limits.max_particles}"))
+        candidates, tests = count_candidates(scene)
+        if tests > COUNT_FACTOR * limits.max_particles:
+            problems.append(("bodies", f"the bodies' bounding boxes hold {candidates:.3g} candidate particles "
+                                       f"(overlapping cells x particles_per_cell^{scene.dimension}), "
+                                       f"{tests:.3g} point-in-shape tests with their geometries' parts: more "
+                                       f"than {COUNT_FACTOR} x the limit of {limits.max_particles} particles"))
+        elif candidates > limits.max_particles:
+            if sum(count_particles(scene, stop_above=limits.max_particles)) > limits.max_particles:
+                problems.append(("bodies", f"more particles than the limit of {limits.max_particles}"))
     return problems

@@ -66,18 +66,45 @@ def particle_volume(scene: Scene, body: Body) -> float:
     return math.prod(scene.cell_sizes()) / body.particles_per_cell ** scene.dimension
 
 
-def candidate_coordinates(scene: Scene, body: Body) -> list[np.ndarray]:
-    """Per axis, the candidate particle coordinates: those of the grid cells that
-    overlap the body's bounding box. Candidates are their tensor product."""
+def candidate_cells(scene: Scene, body: Body) -> list[tuple[int, int]]:
+    """Per axis, the range [first, stop) of the grid cells that overlap the body's
+    bounding box: arithmetic only, whatever the sizes."""
     lower, upper = body.geometry.shape().bounding_box()
     grid_lower, shape, sizes = scene.grid_lower(), scene.grid_shape(), scene.cell_sizes()
-    ppc = body.particles_per_cell
-    offsets = (np.arange(ppc) + 0.5) / ppc
-    axes = []
+    ranges = []
     for a in range(scene.dimension):
         first = max(0, math.floor((lower[a] - grid_lower[a]) / sizes[a]))
         stop = min(shape[a], math.floor((upper[a] - grid_lower[a]) / sizes[a]) + 1)
-        cells = np.arange(first, max(first, stop))
+        ranges.append((first, max(first, stop)))
+    return ranges
+
+
+def count_candidates(scene: Scene) -> tuple[int, int]:
+    """Candidate particles of all bodies (an upper bound of the particles) and the
+    point-in-shape tests counting them takes (candidates x the geometry's primitive
+    shapes), computed without visiting them: what a limit check decides from."""
+    candidates = tests = 0
+    for body in scene.bodies:
+        count = math.prod((stop - first) * body.particles_per_cell for first, stop in candidate_cells(scene, body))
+        candidates += count
+        tests += count * _primitives(body.geometry)
+    return candidates, tests
+
+
+def _primitives(spec) -> int:
+    """Boxes, spheres and cylinders in a geometry (each is tested on every candidate)."""
+    parts = getattr(spec, "parts", None)
+    return 1 if parts is None else sum(_primitives(part) for part in parts)
+
+
+def candidate_coordinates(scene: Scene, body: Body) -> list[np.ndarray]:
+    """Per axis, the candidate particle coordinates: those of the grid cells that
+    overlap the body's bounding box. Candidates are their tensor product."""
+    grid_lower, sizes = scene.grid_lower(), scene.cell_sizes()
+    offsets = (np.arange(body.particles_per_cell) + 0.5) / body.particles_per_cell
+    axes = []
+    for a, (first, stop) in enumerate(candidate_cells(scene, body)):
+        cells = np.arange(first, stop)
         axes.append(grid_lower[a] + (cells[:, None] + offsets).ravel() * sizes[a])
     return axes
 

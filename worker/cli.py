@@ -14,6 +14,7 @@ from core.logs import configure_logging
 from core.settings import get_settings
 from worker.disk import remove_expired
 from worker.heartbeat import Heartbeat
+from worker.webhooks import WebhookSender
 from worker.warmup import warm_up
 
 log = logging.getLogger("mpm.worker")
@@ -54,8 +55,9 @@ def worker_command(args: argparse.Namespace) -> int:
                           sweep_every=settings.lease_seconds / 3,
                           retain=lambda: remove_expired(get_store(), settings.jobs_dir, settings.retention_days),
                           retain_every=min(3600.0, settings.retention_days * 86400 / 10))
-    worker_ready.connect(lambda **_: heartbeat.start(), weak=False)
-    worker_shutdown.connect(lambda **_: heartbeat.stop(), weak=False)
+    sender = WebhookSender(get_store(), settings)
+    worker_ready.connect(lambda **_: (heartbeat.start(), sender.start()), weak=False)
+    worker_shutdown.connect(lambda **_: (heartbeat.stop(), sender.stop()), weak=False)
 
     worker = app.Worker(
         hostname=name, pool_cls="threads",

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import shutil
 import time
 from datetime import datetime, timezone
 from pathlib import Path
 
+from core.disk import folder_bytes, human
 from core.paths import JobFiles
 from core.models import FINISHED
 from core.store import JobStore, job_key, status_index
@@ -21,31 +21,7 @@ log = logging.getLogger("mpm.worker")
 # every folder); the job's own folder is measured at each check (a few files).
 TOTAL_EVERY_SECONDS = 30.0
 
-
-def folder_bytes(path: Path) -> int:
-    """The size of the files under `path` (0 when it does not exist)."""
-    total = 0
-    try:
-        entries = list(os.scandir(path))
-    except OSError:
-        return 0
-    for entry in entries:
-        try:
-            if entry.is_dir(follow_symlinks=False):
-                total += folder_bytes(Path(entry.path))
-            elif entry.is_file(follow_symlinks=False):
-                total += entry.stat(follow_symlinks=False).st_size
-        except OSError:  # removed while we looked
-            continue
-    return total
-
-
-def human(count: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB"):
-        if count < 1024:
-            return f"{count:.0f} {unit}" if unit == "B" else f"{count:.1f} {unit}"
-        count /= 1024
-    return f"{count:.1f} TiB"
+__all__ = ["DiskQuota", "folder_bytes", "human", "remove_expired"]
 
 
 class DiskQuota:

@@ -63,6 +63,9 @@ def _read_lines(stream, lines: queue.Queue, log) -> None:
             item = None
         if isinstance(item, dict):
             lines.put(item)
+            if item.get("event") == "done":  # the run's last word goes to its log too (GET .../log)
+                log.write(raw)
+                log.flush()
         elif raw.strip():
             log.write(raw)
             log.flush()

@@ -1,6 +1,6 @@
 // The MPM dashboard: a job table, a job page and a "new job" form over the HTTP API (/v1).
 // Plain JavaScript, no build step, no network access beyond the service itself.
-// Routes (hash): #/jobs[?status=S], #/jobs/ID, #/new.
+// Routes (hash): #/jobs[?status=S], #/jobs/ID, #/sweeps, #/sweeps/ID, #/new.
 "use strict";
 
 (() => {
@@ -345,25 +345,32 @@
     return ticks;
   }
 
-  /** Line plot of the energies against time; thins long series to at most ~1500 points. */
+  /** Line plot of the energies against time. */
   function energyPlot(series) {
-    const time = series.time || [];
     const present = ENERGY_SERIES.filter(([key]) => Array.isArray(series[key]) && series[key].length);
-    if (time.length < 2 || !present.length) {
-      return h("div", { class: "placeholder" }, "No energy data yet.");
-    }
-    const stride = Math.max(1, Math.ceil(time.length / 1500));
-    const index = [];
-    for (let i = 0; i < time.length; i += stride) index.push(i);
-    if (index[index.length - 1] !== time.length - 1) index.push(time.length - 1);
+    return linePlot(present.map(([key, label, colour]) => ({ label, colour, x: series.time || [], y: series[key] })),
+                    "energy", "No energy data yet.");
+  }
 
-    const values = present.flatMap(([key]) => index.map((i) => series[key][i])).filter(Number.isFinite);
+  /** Lines ({label, colour, x, y}) on shared axes, y against time; thins each to ~1500 points. */
+  function linePlot(lines, yLabel, emptyText) {
+    lines = lines.filter((line) => line.x.length >= 2 && line.y.length);
+    if (!lines.length) return h("div", { class: "placeholder" }, emptyText);
+    const thinned = lines.map((line) => {
+      const stride = Math.max(1, Math.ceil(line.x.length / 1500));
+      const index = [];
+      for (let i = 0; i < line.x.length; i += stride) index.push(i);
+      if (index[index.length - 1] !== line.x.length - 1) index.push(line.x.length - 1);
+      return { ...line, index: index.filter((i) => Number.isFinite(line.y[i]) && Number.isFinite(line.x[i])) };
+    });
+    const values = thinned.flatMap((line) => line.index.map((i) => line.y[i]));
+    const times = thinned.flatMap((line) => line.index.map((i) => line.x[i]));
     let [ymin, ymax] = [Math.min(0, ...values), Math.max(...values)];
     if (!(ymax > ymin)) ymax = ymin + 1;
     const yTicks = niceTicks(ymin, ymax);
     ymin = Math.min(ymin, yTicks[0]);
     ymax = Math.max(ymax, yTicks[yTicks.length - 1]);
-    const [xmin, xmax] = [time[0], time[time.length - 1]];
+    const [xmin, xmax] = [Math.min(...times), Math.max(...times)];
 
     const W = 560, H = 300, left = 64, right = 16, top = 16, bottom = 40;
     const x = (t) => left + ((t - xmin) / (xmax - xmin || 1)) * (W - left - right);
@@ -375,23 +382,23 @@
     const xTicks = niceTicks(xmin, xmax, 6).filter((t) => t >= xmin && t <= xmax).map((t) => h("g", { class: "tick x" },
       h("line", { x1: x(t), x2: x(t), y1: H - bottom, y2: H - bottom + 5 }),
       h("text", { x: x(t), y: H - bottom + 19, "text-anchor": "middle" }, fmtNumber(t, 3))));
-    const lines = present.map(([key, label, colour]) => {
-      const points = index.filter((i) => Number.isFinite(series[key][i]))
-        .map((i) => `${x(time[i]).toFixed(1)},${y(series[key][i]).toFixed(1)}`).join(" ");
-      return h("polyline", { class: `series ${label}`, points, style: `stroke: ${colour}` }, h("title", {}, `${label} energy`));
+    const polylines = thinned.map((line) => {
+      const points = line.index.map((i) => `${x(line.x[i]).toFixed(1)},${y(line.y[i]).toFixed(1)}`).join(" ");
+      return h("polyline", { class: "series", points, style: `stroke: ${line.colour}`, dataset: { label: line.label } },
+        h("title", {}, line.label));
     });
 
     return h("figure", { class: "energy" },
-      h("svg", { class: "energy-plot", viewBox: `0 0 ${W} ${H}`, role: "img", "aria-label": "energy against time" },
+      h("svg", { class: "energy-plot", viewBox: `0 0 ${W} ${H}`, role: "img", "aria-label": `${yLabel} against time` },
         grid, xTicks,
         h("line", { class: "axis", x1: left, x2: W - right, y1: H - bottom, y2: H - bottom }),
         h("line", { class: "axis", x1: left, x2: left, y1: top, y2: H - bottom }),
         h("text", { class: "axis-label", x: (left + W - right) / 2, y: H - 4, "text-anchor": "middle" }, "time"),
         h("text", { class: "axis-label", x: 14, y: (top + H - bottom) / 2, "text-anchor": "middle",
-                    transform: `rotate(-90 14 ${(top + H - bottom) / 2})` }, "energy"),
-        lines),
-      h("figcaption", { class: "legend" }, present.map(([key, label, colour]) =>
-        h("span", { class: "legend-item" }, h("i", { style: `background: ${colour}` }), label))));
+                    transform: `rotate(-90 14 ${(top + H - bottom) / 2})` }, yLabel),
+        polylines),
+      h("figcaption", { class: "legend" }, thinned.map((line) =>
+        h("span", { class: "legend-item" }, h("i", { style: `background: ${line.colour}` }), line.label))));
   }
 
   // ---------------------------------------------------------------- view: job list
@@ -500,6 +507,9 @@
     const plot = h("div", { class: "plot" }, h("div", { class: "placeholder" }, "No energy data yet."));
     const energyNow = h("dl", { class: "stats energies" });
     const sceneBox = h("div", { class: "scene" }, h("div", { class: "placeholder" }, "Loading…"));
+    const logBox = h("pre", { class: "log", "aria-label": "solver log" });
+    const logNote = h("div", { class: "placeholder" }, "No log lines yet.");
+    let logLine = 0;
 
     container.replaceChildren(
       h("a", { class: "back", href: "#/jobs" }, "← All jobs"),
@@ -511,7 +521,18 @@
       h("div", { class: "columns" },
         h("section", { class: "card" }, h("h2", {}, "Preview"), h("div", { class: "preview-frame" }, image, imageNote), controls),
         h("section", { class: "card" }, h("h2", {}, "Energy"), plot, energyNow)),
-      h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Scene")), sceneBox)));
+      h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Scene")), sceneBox)),
+      h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Solver log")),
+        logNote, logBox)));
+
+    /** The log lines written since the last read (GET .../log?since=N), appended. */
+    async function loadLog() {
+      const answer = await api(jobUrl(id, `/log?since=${logLine}`), { raw: true });
+      const text = await answer.text();
+      logLine = Number(answer.headers.get("X-MPM-Next-Line") || logLine);
+      if (text) logBox.append(text);
+      logNote.hidden = logBox.textContent.length > 0;
+    }
 
     function renderRecord() {
       title.textContent = record.name || "(unnamed)";
@@ -616,10 +637,12 @@
         await loadPreview(-1, null);
       }
       if (record.status === "running" && Date.now() - lastSeriesAt > 4000) await loadSeries();
+      if (record.status === "running") await loadLog();
       if (!ACTIVE.has(record.status) && !finishedShown) {
         finishedShown = true;
         showFinishedControls();
         await loadSeries();
+        await loadLog();
       }
       return ACTIVE.has(record.status);
     }
@@ -782,6 +805,98 @@
 
   // ---------------------------------------------------------------- routing
 
+  // ---------------------------------------------------------------- views: sweeps
+
+  const sweepUrl = (id, tail = "") => `v1/sweeps/${encodeURIComponent(id)}${tail}`;
+  const LINE_COLOURS = ["#2563eb", "#dc2626", "#059669", "#d97706", "#7c3aed", "#0891b2", "#db2777", "#65a30d"];
+  const showValues = (parameters) => Object.entries(parameters).map(([p, v]) => `${p} = ${JSON.stringify(v)}`).join(", ");
+
+  function sweepsView(container) {
+    const body = h("tbody");
+    const empty = h("div", { class: "placeholder", hidden: true }, "No sweeps yet (POST /v1/sweeps, mpm sweep).");
+    container.replaceChildren(h("section", { class: "card" }, h("div", { class: "toolbar" }, h("h1", {}, "Sweeps")),
+      h("div", { class: "table-wrap" }, h("table", { class: "sweeps" },
+        h("thead", {}, h("tr", {}, ["Name", "Status", "Jobs", "Progress", "Parameters", "Age"].map((t) => h("th", {}, t)))),
+        body)), empty));
+    async function load() {
+      const { sweeps } = await api("v1/sweeps");
+      body.replaceChildren(...sweeps.map((sweep) => h("tr", { class: "sweep-row", dataset: { id: sweep.id },
+        onclick: () => { location.hash = `#/sweeps/${sweep.id}`; } },
+        h("td", { class: "name" }, h("a", { href: `#/sweeps/${sweep.id}` }, sweep.name || "(unnamed)"),
+          h("div", { class: "id" }, sweep.id.slice(0, 8))),
+        h("td", {}, badge(sweep.status)),
+        h("td", { class: "num" }, `${sweep.jobs.length - sweep.counts.queued - sweep.counts.running} / ${sweep.jobs.length}`),
+        h("td", { class: "progress-cell" }, progressBar({ progress: sweep.progress, status: sweep.status })),
+        h("td", {}, Object.keys(sweep.parameters).join(", ")),
+        h("td", { class: "age" }, fmtAge(sweep.created_at)))));
+      empty.hidden = sweeps.length > 0;
+      return sweeps.some((sweep) => sweep.status !== "finished");
+    }
+    return new Poller(load);
+  }
+
+  /** A sweep: its jobs side by side (parameters, status, energies) and their total energies in one plot. */
+  function sweepView(container, id) {
+    const title = h("h1", {}, "Sweep");
+    const head = h("div");
+    const rows = h("tbody");
+    const headRow = h("tr");
+    const plot = h("div", { class: "plot" }, h("div", { class: "placeholder" }, "No energy data yet."));
+    const series = new Map();   // job id -> its series, once the job has finished
+    const cancel = h("button", { class: "button danger", onclick: async () => {
+      cancel.disabled = true; await api(sweepUrl(id, "/cancel"), { method: "POST" }); poller.current.now(); } }, "Cancel sweep");
+    container.replaceChildren(
+      h("a", { class: "back", href: "#/sweeps" }, "← All sweeps"),
+      h("section", { class: "card job-head" }, h("div", { class: "title-line" }, title),
+        h("code", { class: "id" }, id), h("div", { class: "actions" }, cancel), head),
+      h("section", { class: "card" }, h("h2", {}, "Jobs"), h("div", { class: "table-wrap" },
+        h("table", { class: "sweep-jobs" }, h("thead", {}, headRow), rows))),
+      h("section", { class: "card" }, h("h2", {}, "Total energy of each job"), plot));
+
+    async function load() {
+      let sweep;
+      try {
+        sweep = await api(sweepUrl(id));
+      } catch (error) {
+        if (error instanceof ApiError && error.status === 404) {
+          container.replaceChildren(h("section", { class: "card" }, h("h1", {}, "No such sweep"),
+            h("a", { href: "#/sweeps" }, "Back to all sweeps")));
+          return false;
+        }
+        throw error;
+      }
+      const pointers = Object.keys(sweep.parameters);
+      title.textContent = sweep.name || "(unnamed sweep)";
+      document.title = `${sweep.name || id} · MPM`;
+      head.replaceChildren(badge(sweep.status), progressBar({ progress: sweep.progress, status: sweep.status }),
+        h("span", { class: "counts" }, STATUSES.map((s) => `${sweep.counts[s]} ${s}`).join(" · ")));
+      cancel.disabled = sweep.status === "finished";
+      headRow.replaceChildren(...["Job", ...pointers, "Status", "Progress", "Kinetic", "Strain", "Total"].map((t) => h("th", {}, t)));
+      rows.replaceChildren(...sweep.jobs.map((job, k) => h("tr", { class: "sweep-job", dataset: { id: job.id, status: job.status } },
+        h("td", {}, h("i", { class: "swatch", style: `background: ${LINE_COLOURS[k % LINE_COLOURS.length]}` }),
+          h("a", { href: `#/jobs/${job.id}` }, job.id.slice(0, 8))),
+        ...pointers.map((p) => h("td", { class: "num" }, JSON.stringify(job.parameters[p]))),
+        h("td", {}, badge(job.status)),
+        h("td", { class: "progress-cell" }, progressBar({ progress: job.progress || 0, status: job.status })),
+        ...["kinetic", "strain", "total"].map((e) => h("td", { class: "num" }, fmtNumber((job.energies || {})[e]))))));
+      for (const job of sweep.jobs) {
+        if (!series.has(job.id) && ["succeeded", "failed", "cancelled"].includes(job.status)) {
+          try { series.set(job.id, await api(jobUrl(job.id, "/series"))); } catch (error) {
+            if (error instanceof ConnectionLost) throw error;
+            series.set(job.id, null);   // no result file (cancelled before its first frame)
+          }
+        }
+      }
+      plot.replaceChildren(linePlot(sweep.jobs.map((job, k) => {
+        const s = series.get(job.id);
+        return { label: showValues(job.parameters), colour: LINE_COLOURS[k % LINE_COLOURS.length],
+                 x: (s && s.time) || [], y: (s && s.total_energy) || [] };
+      }), "total energy", "No finished job yet."));
+      return sweep.status !== "finished";
+    }
+    return new Poller(load);
+  }
+
   const view = document.getElementById("view");
 
   function route() {
@@ -794,6 +909,9 @@
     document.title = "MPM dashboard";
     if (parts[0] === "jobs" && parts[1]) {
       poller.current = jobView(view, decodeURIComponent(parts[1]));
+    } else if (parts[0] === "sweeps") {
+      section = "sweeps";
+      poller.current = parts[1] ? sweepView(view, decodeURIComponent(parts[1])) : sweepsView(view);
     } else if (parts[0] === "new") {
       section = "new";
       newJobView(view);

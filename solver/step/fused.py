@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import fused
+from solver import fused, shape
 from solver.threads import first_of
 from solver.step.phases import Phases
 
@@ -17,14 +17,19 @@ class FusedPhases(Phases):
 
     @staticmethod
     def supports(scene) -> bool:
-        return fused.applies(scene)
+        return fused.supports(scene)
 
     def place_particles(self) -> None:
         sim = self.sim
         sim.stencil = None
         sim.rate = np.zeros((sim.particles.count, sim.scene.dimension))
         sim.formulation.place_particles(sim.particles)
-        self._support = fused.support_of(sim.scene.method.shape_function)
+        method = sim.scene.method
+        self._support = fused.support_of(method.shape_function)
+        self._kernels = fused.kernels(sim.scene.dimension)
+        apic_d = shape.REGISTRY[method.shape_function].apic_d
+        # APIC's D_p^-1 per axis (unused without APIC); placed with the particles, after the grid
+        self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
 
     def weights(self) -> None:
         """Nothing to store: every kernel evaluates the weights it needs."""
@@ -32,12 +37,12 @@ class FusedPhases(Phases):
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
         p, g, f, c = sim.particles, sim.grid, sim.frame, sim.copies
-        kernel = fused.p2g_2d if sim.scene.dimension == 2 else fused.p2g_3d
         bad = np.empty(sim.threads, dtype=np.int64)
-        kernel(self._support, fused.constant(sim.affine is not None), fused.constant(sim.loads.any),
-               p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress,
-               acc, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset,
-               g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+        self._kernels.p2g(
+            (self._support, fused.constant(sim.affine is not None), fused.constant(sim.loads.any)),
+            p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc,
+            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset),
+            g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -61,13 +66,13 @@ class FusedPhases(Phases):
     def _g2p(self, dt: float, mode: int) -> None:
         sim = self.sim
         p, g, f = sim.particles, sim.grid, sim.frame
-        kernel = fused.g2p_2d if sim.scene.dimension == 2 else fused.g2p_3d
         bad = np.empty(sim.threads, dtype=np.int64)
-        kernel(self._support, fused.constant(mode), fused.constant(sim.affine is not None),
-               fused.constant(sim.flip_ratio > 0.0), p.x, p.v, self._affine_matrix,
-               sim.flip_ratio, dt,
-               p.mass, f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset, g.v_old, g.v_new, p.L, p.F,
-               p.volume, p.volume0, sim.rate, g.momentum, sim.copies.momentum, bad)
+        self._kernels.g2p(
+            (self._support, fused.constant(mode), fused.constant(sim.affine is not None),
+             fused.constant(sim.flip_ratio > 0.0)),
+            p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume, p.volume0, sim.rate,
+            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset), g.v_old, g.v_new, g.momentum,
+            sim.flip_ratio, dt, self._d_inv, sim.copies.momentum, bad)
         sim.check_inversion(first_of(bad))
 
     @property

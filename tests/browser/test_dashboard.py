@@ -213,3 +213,43 @@ def test_the_job_table_while_a_job_runs(page: Page, sdk, example, screenshot_dir
     screenshot(page, "main section.card", screenshot_dir / "dashboard-jobs.png")
     job.cancel()
     expect(row.locator(".badge")).to_have_text("cancelled", timeout=60_000)
+
+
+SPEED = "/bodies/0/initial_velocity/0"  # the first disk's x velocity: each job its own kinetic energy
+
+
+def test_a_sweep_page_shows_its_jobs_side_by_side_and_overlays_their_energies(page: Page, sdk, example,
+                                                                               screenshot_dir):
+    scene = live_scenes.quick(example, "Speed sweep")
+    scene["time"]["end"] = 0.3
+    sweep = sdk.sweep(scene, {SPEED: [0.05, 0.1, 0.2]})
+    page.goto("/#/sweeps")
+    expect(page.locator(f"tr.sweep-row[data-id='{sweep.id}']")).to_contain_text("Speed sweep")
+    page.locator(f"tr.sweep-row[data-id='{sweep.id}'] a").click()
+    expect(page.locator("code.id")).to_have_text(sweep.id)
+    rows = page.locator("tr.sweep-job")
+    expect(rows).to_have_count(3)
+    expect(page.locator(".job-head .badge")).to_have_text("finished", timeout=120_000)
+    for k, (job, speed) in enumerate(zip(sweep.jobs, ["0.05", "0.1", "0.2"])):
+        expect(rows.nth(k)).to_contain_text(job["id"][:8])
+        expect(rows.nth(k).locator("td").nth(1)).to_have_text(speed)
+        expect(rows.nth(k).locator(".badge")).to_have_text("succeeded")
+    lines = page.locator("svg.energy-plot polyline.series")
+    expect(lines).to_have_count(3)
+    labels = [lines.nth(k).get_attribute("data-label") for k in range(3)]
+    assert labels == [f"{SPEED} = {v}" for v in (0.05, 0.1, 0.2)]
+    assert len({lines.nth(k).get_attribute("points") for k in range(3)}) == 3  # three different curves
+    screenshot(page, "svg.energy-plot", screenshot_dir / "dashboard-sweep.png")
+    rows.nth(0).locator("a").click()
+    expect(page.locator("code.id")).to_have_text(sweep.jobs[0]["id"])
+
+
+def test_the_job_page_shows_the_solver_log(page: Page, sdk, example):
+    job = sdk.submit(live_scenes.unstable(example, "Blows up (log)"))
+    open_job(page, job.id)
+    expect(page.locator(".job-head .badge")).to_have_text("failed", timeout=120_000)
+    text, _ = job.log()
+    assert "ended early" in text
+    log = page.get_by_label("solver log")
+    expect(log).to_contain_text("ended early")
+    assert log.text_content() == text  # every line once

@@ -180,8 +180,10 @@ def test_a_closed_port_is_service_unavailable():
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]  # nothing listens once the probe is closed
     with Client(f"http://127.0.0.1:{port}", retries=1, backoff=0.01) as client:
-        with pytest.raises(ServiceUnavailable, match="cannot reach the service"):
+        with pytest.raises(ServiceUnavailable, match=f"cannot reach the service at http://127.0.0.1:{port}"):
             client.examples()
+    unreachable = mpm("jobs", "--server", f"http://127.0.0.1:{port}")
+    assert unreachable.returncode == 1 and f"http://127.0.0.1:{port}" in unreachable.stderr
 
 
 def test_async_client_live(live, example, tmp_path):
@@ -228,7 +230,7 @@ def test_the_mpm_client_commands(live, example, tmp_path):
 
     listed = mpm("jobs", "--status", "succeeded", env_server=live.url)  # the server from MPM_SERVER
     assert listed.returncode == 0, listed.stderr
-    assert any(line.startswith(job_id) and "sdk-cli" in line for line in listed.stdout.splitlines())
+    assert any(line.split()[0] == job_id[:8] and "sdk-cli" in line for line in listed.stdout.splitlines())
 
     status = mpm("status", job_id, "--json", "--server", live.url)
     assert status.returncode == 0 and json.loads(status.stdout)["status"] == "succeeded"
@@ -242,3 +244,71 @@ def test_the_mpm_client_commands(live, example, tmp_path):
 
     missing = mpm("status", str(uuid.uuid4()), "--server", live.url)
     assert missing.returncode == 1 and "error" in missing.stderr
+
+
+YOUNG = "/materials/elastic/youngs_modulus"
+
+
+def test_a_sweep_from_the_sdk_waits_and_tables(live_client, example, capsys):
+    scene = live_scenes.quick(example, "sdk-sweep")
+    scene["time"]["end"] = 0.2
+    sweep = live_client.sweep(scene, {YOUNG: [1000, 4000], "/time/end": [0.1, 0.2]}, mode="zip")
+    assert [job["parameters"] for job in sweep.jobs] == [{YOUNG: 1000, "/time/end": 0.1},
+                                                         {YOUNG: 4000, "/time/end": 0.2}]
+    sweep.wait(progress=True, timeout=300)
+    assert f"sweep {sweep.id[:8]}: 2/2 finished" in capsys.readouterr().err
+    assert sweep.record["counts"]["succeeded"] == 2
+    rows = sweep.table().splitlines()
+    assert rows[0].split() == ["ID", YOUNG, "/time/end", "STATUS", "KINETIC", "STRAIN", "TOTAL"]
+    for row, job in zip(rows[1:], sweep.jobs):
+        cells = row.split()
+        assert cells[:4] == [job["id"][:8], str(job["parameters"][YOUNG]), str(job["parameters"]["/time/end"]),
+                             "succeeded"]
+        assert float(cells[6]) == pytest.approx(job["energies"]["total"], rel=1e-5)
+    assert sweep.id in [s.id for s in live_client.sweeps()]
+    with pytest.raises(ValidationFailed) as caught:
+        live_client.sweep(scene, {YOUNG: [1000, 0]})
+    assert caught.value.errors[0]["path"] == f"parameters.{YOUNG}"
+    sweep.delete()
+    with pytest.raises(NotFound):
+        live_client.get_sweep(sweep.id)
+
+
+def test_the_sweep_delete_and_log_commands(live, example, tmp_path):
+    scene = tmp_path / "scene.json"
+    quick = live_scenes.quick(example, "cli-sweep")
+    quick["time"]["end"] = 0.1
+    scene.write_text(json.dumps(quick))
+    swept = mpm("sweep", str(scene), "-p", f"{YOUNG}=1000,2000", "--wait", "-q", "--server", live.url)
+    assert swept.returncode == 0, swept.stderr
+    sweep_id, header, *rows = swept.stdout.splitlines()
+    assert header.split()[:3] == ["ID", YOUNG, "STATUS"]
+    assert [row.split()[1:3] for row in rows] == [["1000", "succeeded"], ["2000", "succeeded"]]
+    short = rows[0].split()[0]  # 8 characters, as `mpm jobs` shows them
+
+    log = mpm("log", short, "--server", live.url)
+    assert log.returncode == 0, log.stderr
+    assert json.loads(log.stdout.splitlines()[-1])["event"] == "done"  # the solver's last line
+    follow = mpm("log", short, "--follow", "--since", "0", "--server", live.url)  # a finished job: returns
+    assert follow.returncode == 0 and follow.stdout == log.stdout
+
+    bad = mpm("sweep", str(scene), "-p", "youngs=1", "--server", live.url)
+    assert bad.returncode == 2 and "POINTER=V1,V2" in bad.stderr
+    assert mpm("delete", short, "--server", live.url).returncode == 0
+    gone = mpm("status", short, "--server", live.url)
+    assert gone.returncode == 1 and f"no job '{short}'" in gone.stderr
+    assert mpm("delete", "zz", "--server", live.url).returncode == 1
+    with Client(live.url) as client:
+        client.get_sweep(sweep_id).delete()
+
+
+def test_a_prefix_shared_by_two_jobs_is_refused(live_client, example):
+    jobs = []
+    for i in range(17):  # 17 ids, 16 hex digits: two start alike (each cancelled at once: the queue quota)
+        jobs.append(live_client.submit(live_scenes.long(example, f"prefix{i}")))
+        jobs[-1].cancel()
+    shared = next(c for c in "0123456789abcdef" if sum(job.id.startswith(c) for job in jobs) > 1)
+    with pytest.raises(ValueError, match="several jobs"):
+        live_client.job(shared)
+    unique = next(job for job in jobs if sum(other.id.startswith(job.id[:8]) for other in jobs) == 1)
+    assert live_client.job(unique.id[:8]).id == unique.id

@@ -105,6 +105,9 @@ def processes_with(text: str) -> list[int]:
     return found
 
 
+WEBHOOK_SECRET = "test-webhook-secret"  # MPM_WEBHOOK_SECRET of the integration stack
+
+
 class Stack:
     """Redis + two workers + the API (`mpm serve --no-worker`), sharing one data dir."""
 
@@ -119,7 +122,10 @@ class Stack:
                     "MPM_LEASE_SECONDS": "3",
                     "MPM_MAX_PARTICLES": "50000", "MPM_MAX_STEPS": "5000000",
                     "MPM_MAX_BODY_BYTES": "100000",
-                    "MPM_MAX_CONCURRENT_JOBS": "40", "MPM_MAX_PROCESSES": "2", "PYTHONUNBUFFERED": "1"}
+                    "MPM_MAX_CONCURRENT_JOBS": "40", "MPM_MAX_PROCESSES": "2", "PYTHONUNBUFFERED": "1",
+                    # the anonymous caller's quotas above MPM_MAX_CONCURRENT_JOBS, whose test this is
+                    "MPM_QUOTA_QUEUED_JOBS": "100", "MPM_QUOTA_ACTIVE_JOBS": "100",
+                    "MPM_WEBHOOK_SECRET": WEBHOOK_SECRET}
         self.workers = [self._worker_process(1, warmup=True),
                         # the first worker fills the shared on-disk kernel cache
                         self._worker_process(2, warmup=False)]

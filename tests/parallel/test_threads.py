@@ -57,7 +57,7 @@ def run_in_process(case: dict, threads: int):
 def test_two_threads_give_the_one_thread_particles(name):
     one, _ = run_in_process(CASES[name], 1)
     two, sim = run_in_process(CASES[name], 2)
-    assert sim.fused == fused.applies(sim.scene)       # the fused step where it applies, the general one elsewhere
+    assert sim.fused == fused.supports(sim.scene)       # the fused step where it applies, the general one elsewhere
     assert np.max(np.abs(one["stress"])) > 0
     for field in ("x", "v", "stress"):
         assert relative_difference(one[field], two[field]) <= TOLERANCE, field

@@ -124,6 +124,44 @@ def test_hostile_input_is_refused_cleanly(alice, name, method, path, body, statu
     assert alice.post("/v1/scenes/validate", json=two_disks()).status_code == 200
 
 
+def _cube(cell_size: float, ppc: int = 2) -> dict:
+    return {**TRILLION_PARTICLES, "grid": {**TRILLION_PARTICLES["grid"], "cell_size": cell_size},
+            "bodies": [{**TRILLION_PARTICLES["bodies"][0], "particles_per_cell": ppc}]}
+
+
+def _many_parts(scene: dict) -> None:
+    disk = scene["bodies"][0]["geometry"]
+    scene["bodies"][0]["geometry"] = {"type": "union", "parts": [disk] * 2000}
+
+
+# Scenes whose size is absurd (issue 21: 1 nm cells on a 1 m grid took 36-82 s to refuse):
+# (name, path, request body, the paths the error must name)
+HUGE = [
+    ("1 nm cells, 2D, submitted", "/v1/jobs", {"scene": _scene(lambda s: s["grid"].update(cell_size=1e-9))},
+     {"grid", "bodies"}),
+    ("1 nm cells, 2D, validated", "/v1/scenes/validate", _scene(lambda s: s["grid"].update(cell_size=1e-9)),
+     {"grid", "bodies"}),
+    ("1 nm cells, 3D cube, submitted", "/v1/jobs", {"scene": _cube(1e-9)}, {"grid", "bodies"}),
+    ("1 um cells, 3D, 100 particles a cell and axis", "/v1/scenes/validate", _cube(1e-6, 100), {"grid", "bodies"}),
+    ("a union of 2000 disks on 1 mm cells", "/v1/jobs",
+     {"scene": _scene(lambda s: (_many_parts(s), s["grid"].update(cell_size=1e-3)))}, {"bodies"}),
+]
+
+
+@pytest.mark.parametrize("name,path,body,fields", HUGE, ids=[c[0] for c in HUGE])
+def test_a_huge_scene_is_refused_within_a_second(alice, name, path, body, fields):
+    before = alice.get("/v1/jobs").json()["jobs"]
+    started = time.monotonic()
+    answer = alice.post(path, json=body)
+    elapsed = time.monotonic() - started
+    assert answer.status_code == 422, answer.text[:500]
+    details = answer.json()["error"]["details"]
+    assert {d["path"] for d in details} == fields
+    assert all(d["limit"] in ("MPM_MAX_GRID_NODES", "MPM_MAX_PARTICLES") for d in details), details
+    assert elapsed < 1.0, f"{name} took {elapsed:.2f} s"
+    assert alice.get("/v1/jobs").json()["jobs"] == before  # nothing queued
+
+
 def test_unicode_names_are_kept_as_they_are(alice):
     scene = two_disks("模拟 — ünïcødé 🚀")
     scene["materials"] = {"gummi-ß": scene["materials"]["rubber"]}

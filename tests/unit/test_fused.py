@@ -11,11 +11,12 @@ to 1e-12 relative, the bound the process-equivalence tests use too.
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from solver import fused
+from solver import fused, fused_template, shape
 from solver.scene import load_scene
 from solver.stepper import ExplicitMPM
 
@@ -88,7 +89,26 @@ def test_fused_step_gives_the_general_step(dimension, method):
     ({"axisymmetric": True}, False),
 ])
 def test_fused_kernels_take_the_scenes_they_implement(change, expected):
-    assert fused.applies(load_scene({**SCENE_2D, **change})) is expected
+    assert fused.supports(load_scene({**SCENE_2D, **change})) is expected
+
+
+def test_fused_apic_needs_a_constant_d_p_from_the_shape_function(monkeypatch):
+    scene = load_scene({**SCENE_2D, "method": METHODS["musl-quadratic-apic"]})
+    assert fused.supports(scene)
+    monkeypatch.setitem(shape.REGISTRY, "quadratic_bspline", replace(shape.REGISTRY["quadratic_bspline"], apic_d=None))
+    assert not fused.supports(scene)
+    assert not ExplicitMPM(scene).fused
+
+
+def test_the_generated_kernels_are_rewritten_only_when_the_template_changes(tmp_path, monkeypatch):
+    monkeypatch.setattr(fused_template, "_folders", lambda: [tmp_path])
+    path = fused_template.write(3)
+    assert path.parent == tmp_path and path.read_text() == fused_template.source(3)
+    stamp = path.stat().st_mtime_ns
+    assert fused_template.write(3) == path and path.stat().st_mtime_ns == stamp   # numba's cache stays valid
+    path.write_text("# an older template's output\n")
+    fused_template.write(3)
+    assert path.read_text() == fused_template.source(3)
 
 
 def test_a_particle_leaving_the_grid_is_named_by_the_fused_step():

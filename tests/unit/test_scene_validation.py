@@ -348,6 +348,38 @@ class TestLimits:
         assert [e["path"] for e in caught.value.errors] == [path]
         assert word in caught.value.errors[0]["message"]
 
+    @pytest.mark.parametrize("cell_size", [1e-9, 1e-6, 1e-4])
+    def test_a_huge_grid_is_refused_from_arithmetic_alone(self, cell_size, monkeypatch):
+        # issue 21: 1 nm cells on a 1 m grid took 36-82 s to refuse (the candidates were walked)
+        from solver import seeding
+        monkeypatch.setattr(seeding, "_inside_chunks", lambda *a, **k: pytest.fail("candidates were visited"))
+        scene = copy.deepcopy(two_disks())
+        scene["grid"]["cell_size"] = cell_size
+        with pytest.raises(SceneError) as caught:
+            load_scene(scene, Limits(max_particles=2_000_000, max_grid_nodes=4_000_000))
+        assert {e["path"] for e in caught.value.errors} == {"grid", "bodies"}
+        assert "candidate particles" in caught.value.errors[1]["message"]
+
+    def test_a_geometry_of_many_parts_is_refused_before_counting(self, monkeypatch):
+        # every candidate is tested against every part: 4000 parts on 324 candidates is
+        # over 8 x 100000 tests, whatever the particles come to
+        from solver import seeding
+        monkeypatch.setattr(seeding, "_inside_chunks", lambda *a, **k: pytest.fail("candidates were visited"))
+        scene = copy.deepcopy(two_disks())
+        disk = scene["bodies"][0]["geometry"]
+        scene["bodies"][0]["geometry"] = {"type": "union", "parts": [disk] * 4000}
+        with pytest.raises(SceneError) as caught:
+            load_scene(scene, Limits(max_particles=100_000))
+        assert "point-in-shape tests" in caught.value.errors[0]["message"]
+
+    def test_candidates_are_counted_as_seeding_makes_them(self):
+        from solver.seeding import candidate_coordinates, count_candidates, count_particles
+        scene = load_scene(two_disks())
+        candidates, tests = count_candidates(scene)
+        assert candidates == tests == sum(math.prod(len(axis) for axis in candidate_coordinates(scene, body))
+                                          for body in scene.bodies)
+        assert candidates >= sum(count_particles(scene))
+
 
 class TestMaterialHelpers:
     def test_elastic_constants(self):

@@ -247,7 +247,7 @@ def test_the_summary_budgets_the_registered_support(monkeypatch):
 @pytest.mark.parametrize("name", [name for name in ALL if shape.REGISTRY[name].apic_d is not None])
 def test_the_declared_apic_constant_is_the_inertia_of_the_weights(name):
     """D_p = sum_I w_Ip (x_I - x_p)(x_I - x_p)^T = c h^2 I (eq. 5.38) at every position,
-    c = APIC_D: exact in exact arithmetic, so to round-off of the O(h^2) sums."""
+    c = apic_d: exact in exact arithmetic, so to round-off of the O(h^2) sums."""
     rng = np.random.default_rng(3)
     grid = make_grid(2)
     x = random_points(name, grid, 200, rng)

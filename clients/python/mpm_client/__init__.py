@@ -7,7 +7,7 @@
     job.download("two_disks.h5")
 """
 from .aio import AsyncClient, AsyncJob
-from .client import Client, Job
+from .client import Client, Job, Sweep
 from .errors import (
     ApiError,
     Conflict,
@@ -27,5 +27,5 @@ from .models import ExampleInfo, JobRecord, Summary
 __all__ = [
     "ApiError", "AsyncClient", "AsyncJob", "Client", "Conflict", "ExampleInfo", "Job", "JobCancelled",
     "JobFailed", "JobRecord", "MpmError", "NotFound", "QuotaExceeded", "ServiceUnavailable", "Summary",
-    "TooLarge", "Unauthorized", "ValidationFailed", "WaitTimeout",
+    "Sweep", "TooLarge", "Unauthorized", "ValidationFailed", "WaitTimeout",
 ]

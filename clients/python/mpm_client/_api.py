@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -16,7 +17,7 @@ from urllib.parse import quote
 
 import httpx
 
-from .errors import JobCancelled, JobFailed, ServiceUnavailable, error_from_response
+from .errors import JobCancelled, JobFailed, NotFound, ServiceUnavailable, error_from_response
 from .scenes import SceneLike, scene_document
 
 DEFAULT_SERVER = "http://127.0.0.1:8000"
@@ -42,10 +43,10 @@ def job_path(job_id: str, tail: str = "") -> str:
     return f"/v1/jobs/{quote(str(job_id), safe='')}{tail}"
 
 
-def submit(scene: SceneLike, processes: int | None) -> Call:
+def submit(scene: SceneLike, processes: int | None, callback_url: str | None = None) -> Call:
     body: dict[str, Any] = {"scene": scene_document(scene)}
-    if processes is not None:
-        body["processes"] = processes
+    body.update({key: value for key, value in (("processes", processes), ("callback_url", callback_url))
+                 if value is not None})
     return Call("POST", "/v1/jobs", json=body)
 
 
@@ -57,6 +58,40 @@ def list_jobs(status: str | None, limit: int | None, cursor: str | None) -> Call
     params = {key: value for key, value in (("status", status), ("limit", limit), ("cursor", cursor))
               if value is not None}
     return Call("GET", "/v1/jobs", params=params)
+
+
+FULL_ID = re.compile(r"^[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}$")
+PREFIX = re.compile(r"^[0-9a-f-]{1,36}$")
+
+
+def find_prefix(prefix: str) -> Call:
+    """The jobs whose id starts with ``prefix`` (two at most: one means it is unique)."""
+    if not PREFIX.match(prefix.lower()):  # no job id looks so
+        raise NotFound(f"no job {prefix!r} (a job id, or its start, is hex digits and dashes)",
+                       status_code=404, code="not_found")
+    return Call("GET", "/v1/jobs", params={"id_prefix": prefix.lower(), "limit": 2})
+
+
+def unique(prefix: str, found: list[dict[str, Any]]) -> str:
+    """The id of the one job found for ``prefix``, or the error saying why not."""
+    if not found:
+        raise NotFound(f"no job {prefix!r}", status_code=404, code="not_found")
+    if len(found) > 1:
+        raise ValueError(f"{prefix!r} is the start of several jobs' ids ({found[0]['id'][:12]}..., "
+                         f"{found[1]['id'][:12]}...): give more of it")
+    return found[0]["id"]
+
+
+def sweep(scene: SceneLike, parameters: dict[str, list[Any]], mode: str, processes: int | None,
+          callback_url: str | None) -> Call:
+    body: dict[str, Any] = {"scene": scene_document(scene), "parameters": parameters, "mode": mode}
+    body.update({key: value for key, value in (("processes", processes), ("callback_url", callback_url))
+                 if value is not None})
+    return Call("POST", "/v1/sweeps", json=body)
+
+
+def sweep_path(sweep_id: str, tail: str = "") -> str:
+    return f"/v1/sweeps/{quote(str(sweep_id), safe='')}{tail}"
 
 
 def preview(job_id: str, frame: int, field_name: str | None) -> Call:
@@ -83,13 +118,15 @@ class Retrier:
     retries: int = 3
     backoff: float = 0.25
     max_backoff: float = 8.0
+    url: str = ""   # the service, named in the error when it cannot be reached
     attempt: int = field(default=0, init=False)
 
     def after_error(self, exc: httpx.TransportError) -> float:
         """The delay before the next attempt, or raises :class:`ServiceUnavailable`."""
         retryable = isinstance(exc, _NOT_SENT) or self.method.upper() in _IDEMPOTENT
         if not retryable or self.attempt >= self.retries:
-            raise ServiceUnavailable(f"cannot reach the service: {exc}", status_code=None) from exc
+            where = f" at {self.url}" if self.url else ""
+            raise ServiceUnavailable(f"cannot reach the service{where}: {exc}", status_code=None) from exc
         return self._next_delay(None)
 
     def after_response(self, response: httpx.Response) -> float | None:
@@ -177,3 +214,27 @@ def finished(job: Any) -> Any:
 
 def result_path(job_id: str, path: str | os.PathLike[str] | None) -> Path:
     return Path(path) if path is not None else Path(tempfile.gettempdir()) / f"mpm-{job_id}.h5"
+
+
+def sweep_line(record: dict[str, Any]) -> str:
+    """``sweep 1a2b3c4d: 3/10 finished (2 running), 47 %``: a sweep's progress on one line."""
+    counts = record["counts"]
+    done = sum(counts.get(status, 0) for status in ("succeeded", "failed", "cancelled"))
+    return (f"sweep {record['id'][:8]}: {done}/{len(record['jobs'])} finished "
+            f"({counts.get('running', 0)} running), {100 * record['progress']:.0f} %")
+
+
+def sweep_table(record: dict[str, Any]) -> str:
+    pointers = list(record["parameters"])
+    header = ["ID", *pointers, "STATUS", "KINETIC", "STRAIN", "TOTAL"]
+    rows = [header]
+    for job in record["jobs"]:
+        energies = job.get("energies") or {}
+        rows.append([job["id"][:8], *(str(job["parameters"].get(p)) for p in pointers), job["status"],
+                     *(_number(energies.get(k)) for k in ("kinetic", "strain", "total"))])
+    widths = [max(len(row[i]) for row in rows) for i in range(len(header))]
+    return "\n".join("  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows)
+
+
+def _number(value: Any) -> str:
+    return "" if value is None else f"{value:.6g}"

@@ -74,7 +74,7 @@ class AsyncClient:
         return AsyncJob(self, JobRecord.model_validate(record))
 
     def _retrier(self, call: _api.Call) -> _api.Retrier:
-        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff)
+        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff, url=self.base_url)
 
     async def _send(self, call: _api.Call) -> httpx.Response:
         retrier = self._retrier(call)

@@ -1,4 +1,5 @@
-"""The client commands of ``mpm``: submit, jobs, status, cancel, download.
+"""The client commands of ``mpm``: submit, jobs, status, cancel, download, delete, log, sweep.
+Every command that takes a job id takes a unique start of it too.
 
 Each command is registered by a ``register_*(subparsers)`` function, listed in the
 ``mpm.commands`` entry-point group; :func:`main` adds these and then every other
@@ -11,6 +12,7 @@ import argparse
 import functools
 import json
 import sys
+import time
 from datetime import datetime, timezone
 from importlib.metadata import entry_points
 from itertools import islice
@@ -116,7 +118,7 @@ def _jobs(args: argparse.Namespace) -> int:
 def _table(jobs: list[Job]) -> str:
     header = ("ID", "NAME", "STATUS", "PROGRESS", "SIM TIME", "AGE")
     rows = [header] + [
-        (job.id, job.record.name or "", job.record.status, f"{job.record.progress * 100:.0f}%",
+        (job.id[:8], job.record.name or "", job.record.status, f"{job.record.progress * 100:.0f}%",
          f"{job.record.sim_time:.4g}", _age(job.record.created_at))
         for job in jobs
     ]
@@ -142,7 +144,7 @@ def _age(created: datetime | None) -> str:
 
 def register_status(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("status", parents=[_connection_options()], help="show one job")
-    parser.add_argument("job_id", metavar="ID")
+    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
     parser.add_argument("--json", action="store_true", help="the whole job record as JSON")
     parser.set_defaults(func=_status)
 
@@ -171,7 +173,7 @@ def _status(args: argparse.Namespace) -> int:
 
 def register_cancel(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("cancel", parents=[_connection_options()], help="stop a job")
-    parser.add_argument("job_id", metavar="ID")
+    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
     parser.set_defaults(func=_cancel)
 
 
@@ -189,7 +191,7 @@ def _cancel(args: argparse.Namespace) -> int:
 def register_download(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("download", parents=[_connection_options()],
                                    help="download a job's result.h5")
-    parser.add_argument("job_id", metavar="ID")
+    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
     parser.add_argument("file", metavar="FILE", help="where to write the HDF5 file")
     parser.set_defaults(func=_download)
 
@@ -202,9 +204,101 @@ def _download(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- delete ------------------------------------------------------------------------
+
+
+def register_delete(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("delete", parents=[_connection_options()],
+                                   help="remove a finished job and its files")
+    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
+    parser.set_defaults(func=_delete)
+
+
+@_reports_errors
+def _delete(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        job = client.job(args.job_id)
+        job.delete()
+    print(f"{job.id} deleted")
+    return 0
+
+
+# -- log ---------------------------------------------------------------------------
+
+
+def register_log(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("log", parents=[_connection_options()], help="print a job's solver log")
+    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
+    parser.add_argument("--since", type=int, default=0, metavar="N", help="from line N on (0: the first)")
+    parser.add_argument("-f", "--follow", action="store_true", help="keep printing new lines until the job ends")
+    parser.add_argument("--poll", type=float, default=1.0, help="seconds between reads with --follow")
+    parser.set_defaults(func=_log)
+
+
+@_reports_errors
+def _log(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        job = client.job(args.job_id)
+        since = args.since
+        while True:
+            text, since = job.log(since)
+            sys.stdout.write(text)
+            sys.stdout.flush()
+            if not args.follow or (not text and job.refresh().record.finished):
+                return 0
+            if not text:
+                time.sleep(args.poll)
+
+
+# -- sweep -------------------------------------------------------------------------
+
+
+def _parameter(text: str) -> tuple[str, list]:
+    """``/materials/m/youngs_modulus=1e6,2e6`` -> (pointer, [1000000.0, 2000000.0]); each
+    value is read as JSON (a number, true, null, "text"), else kept as text."""
+    pointer, sep, values = text.partition("=")
+    if not sep or not pointer.startswith("/") or not values:
+        raise argparse.ArgumentTypeError(f"expected POINTER=V1,V2,... with a JSON pointer (/a/b), got {text!r}")
+    return pointer, [_value(item) for item in values.split(",")]
+
+
+def _value(text: str):
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def register_sweep(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "sweep", parents=[_connection_options()], help="submit one job per combination of parameter values",
+        description="Submit a sweep: the scene once per combination of the values given to JSON pointers "
+                    "into it; prints the sweep id, then (with --wait) a table of the jobs.")
+    parser.add_argument("scene", metavar="SCENE", help="the base scene file (JSON)")
+    parser.add_argument("-p", "--parameter", dest="parameters", action="append", type=_parameter, required=True,
+                        metavar="POINTER=V1,V2", help="a JSON pointer into the scene and its values (repeat)")
+    parser.add_argument("--mode", choices=("grid", "zip"), default="grid",
+                        help="grid: every combination (default); zip: the lists side by side")
+    parser.add_argument("--callback-url", default=None, help="POST the sweep there when it has finished")
+    parser.add_argument("--wait", action="store_true", help="wait for every job, then print the table")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress line")
+    parser.set_defaults(func=_sweep)
+
+
+@_reports_errors
+def _sweep(args: argparse.Namespace) -> int:
+    with _client(args) as client:
+        sweep = client.sweep(args.scene, dict(args.parameters), args.mode, callback_url=args.callback_url)
+        print(sweep.id, flush=True)
+        if args.wait:
+            print(sweep.wait(progress=not args.quiet).table())
+    return 0
+
+
 # -- the mpm command ---------------------------------------------------------------
 
-CLIENT_COMMANDS = (register_submit, register_jobs, register_status, register_cancel, register_download)
+CLIENT_COMMANDS = (register_submit, register_jobs, register_status, register_cancel, register_download,
+                   register_delete, register_log, register_sweep)
 
 
 def add_plugin_commands(subparsers: argparse._SubParsersAction) -> None:

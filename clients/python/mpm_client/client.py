@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any, Iterator
@@ -47,9 +48,25 @@ class Client:
 
     # -- the API ---------------------------------------------------------------
 
-    def submit(self, scene: SceneLike, processes: int | None = None) -> "Job":
-        """Validate, store and enqueue a scene (dict, file path, JSON text or solver ``Scene``)."""
-        return self._job(self._send(_api.submit(scene, processes)).json())
+    def submit(self, scene: SceneLike, processes: int | None = None, callback_url: str | None = None) -> "Job":
+        """Validate, store and enqueue a scene (dict, file path, JSON text or solver ``Scene``);
+        with ``callback_url`` the service POSTs the final job record there, signed."""
+        return self._job(self._send(_api.submit(scene, processes, callback_url)).json())
+
+    def sweep(self, scene: SceneLike, parameters: dict[str, list[Any]], mode: str = "grid", *,
+              processes: int | None = None, callback_url: str | None = None) -> "Sweep":
+        """One job per combination of ``parameters`` ({JSON pointer into the scene: values});
+        ``mode`` "grid": every combination, "zip": the lists side by side. All the
+        combinations are validated before any job is queued (:class:`ValidationFailed`)."""
+        return Sweep(self, self._send(_api.sweep(scene, parameters, mode, processes, callback_url)).json())
+
+    def get_sweep(self, sweep_id: str) -> "Sweep":
+        return Sweep(self, self._send(_api.Call("GET", _api.sweep_path(sweep_id))).json())
+
+    def sweeps(self, limit: int = 50) -> list["Sweep"]:
+        """This caller's sweeps, newest first."""
+        answer = self._send(_api.Call("GET", "/v1/sweeps", params={"limit": limit})).json()
+        return [Sweep(self, record) for record in answer["sweeps"]]
 
     def validate(self, scene: SceneLike) -> Summary:
         """The summary of a valid scene; raises :class:`ValidationFailed` with every error."""
@@ -67,7 +84,14 @@ class Client:
                 return
 
     def job(self, job_id: str) -> "Job":
-        return self._job(self._send(_api.Call("GET", _api.job_path(job_id))).json())
+        """A job by its id or a unique start of it (as `mpm jobs` and the dashboard show)."""
+        return self._job(self._send(_api.Call("GET", _api.job_path(self.resolve(job_id)))).json())
+
+    def resolve(self, job_id: str) -> str:
+        """The full id of the job whose id is or starts with ``job_id``."""
+        if _api.FULL_ID.match(job_id.lower()):
+            return job_id.lower()
+        return _api.unique(job_id, self._send(_api.find_prefix(job_id)).json()["jobs"])
 
     def examples(self) -> list[ExampleInfo]:
         answer = self._send(_api.Call("GET", "/v1/examples")).json()
@@ -83,7 +107,7 @@ class Client:
         return Job(self, JobRecord.model_validate(record))
 
     def _retrier(self, call: _api.Call) -> _api.Retrier:
-        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff)
+        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff, url=self.base_url)
 
     def _send(self, call: _api.Call) -> httpx.Response:
         retrier = self._retrier(call)
@@ -191,6 +215,11 @@ class Job:
         """The time series (time, dt, kinetic_energy, ...) as numpy arrays (needs numpy)."""
         return _api.to_arrays(self.client._send(_api.Call("GET", _api.job_path(self.id, "/series"))).json())
 
+    def log(self, since: int = 0) -> tuple[str, int]:
+        """The solver's log lines from line ``since`` on, and the ``since`` of the next call."""
+        answer = self.client._send(_api.Call("GET", _api.job_path(self.id, "/log"), params={"since": since}))
+        return answer.text, int(answer.headers.get("x-mpm-next-line", since))
+
     def scene(self) -> dict[str, Any]:
         """The validated scene the job runs."""
         return self.client._send(_api.Call("GET", _api.job_path(self.id, "/scene"))).json()
@@ -205,3 +234,55 @@ class Job:
         if candidate is None or not candidate.is_file():
             candidate = self.download(_api.result_path(self.id, path))
         return _api.open_h5(candidate)
+
+
+class Sweep:
+    """A submitted sweep. ``record`` is the last answer of ``GET /v1/sweeps/{id}`` (see
+    :meth:`refresh`): ``status``, ``counts``, ``progress`` and ``jobs``."""
+
+    def __init__(self, client: Client, record: dict[str, Any]) -> None:
+        self.client = client
+        self.record = record
+
+    @property
+    def id(self) -> str:
+        return self.record["id"]
+
+    @property
+    def jobs(self) -> list[dict[str, Any]]:
+        """Each job: ``id``, ``parameters`` ({pointer: value}), ``status``, ``progress``, ``energies``."""
+        return self.record["jobs"]
+
+    def __repr__(self) -> str:
+        return f"Sweep({self.id!r}, status={self.record['status']!r}, jobs={len(self.jobs)})"
+
+    def refresh(self) -> "Sweep":
+        self.record = self.client._send(_api.Call("GET", _api.sweep_path(self.id))).json()
+        return self
+
+    def wait(self, timeout: float | None = None, poll: float = 1.0, progress: bool = True) -> "Sweep":
+        """Block until every job has finished (whatever its end); :class:`WaitTimeout` after ``timeout``."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            self.refresh()
+            if progress:
+                print(_api.sweep_line(self.record), end="\r", file=sys.stderr, flush=True)
+            if self.record["status"] == "finished":
+                if progress:
+                    print(file=sys.stderr)
+                return self
+            if deadline is not None and time.monotonic() >= deadline:
+                raise WaitTimeout(f"sweep {self.id} still {self.record['status']} after {timeout} s")
+            time.sleep(poll)
+
+    def table(self) -> str:
+        """The parameters beside each job's status and final energies, one row a job."""
+        return _api.sweep_table(self.record)
+
+    def cancel(self) -> "Sweep":
+        self.record = self.client._send(_api.Call("POST", _api.sweep_path(self.id, "/cancel"))).json()
+        return self
+
+    def delete(self) -> None:
+        """Remove the finished sweep, its jobs and their files."""
+        self.client._send(_api.Call("DELETE", _api.sweep_path(self.id)))
