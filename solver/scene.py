@@ -638,6 +638,9 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         problems += _shape_function_problems(scene)
 
     problems += _load_problems(scene, names, length_ok, expressions_ok)
+    if scene.damping is not None and scene.parallel.processes > 1:   # the ghost nodes' share is not summed yet
+        problems.append(("damping", f"is not supported yet with several processes "
+                                    f"(parallel.processes = {scene.parallel.processes})"))
 
     walls: dict[str, int] = {}
     for i, condition in enumerate(scene.boundary_conditions):

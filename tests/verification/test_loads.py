@@ -189,6 +189,15 @@ def test_bad_loads_are_named(load, path):
     assert path in [e["path"] for e in err.value.errors], err.value.errors
 
 
+def test_damping_with_several_processes_is_refused_until_ghost_nodes_count_once():
+    scene = bar(damping={"type": "local", "coefficient": 0.1})
+    scene["parallel"] = {"processes": 2}
+    with pytest.raises(SceneError) as err:
+        load_scene(scene)
+    assert [e["path"] for e in err.value.errors] == ["damping"]
+    assert "several processes" in err.value.errors[0]["message"]
+
+
 def test_a_self_intersecting_polygon_is_named():
     scene = bar()
     scene["bodies"][0]["geometry"] = {"type": "polygon", "vertices": [[0.2, 0.4], [0.8, 0.6], [0.8, 0.4], [0.2, 0.6]]}
