@@ -96,8 +96,12 @@ def main() -> int:
             subprocess.run(["git", "worktree", "add", "--detach", str(base), args.base], cwd=ROOT, check=True,
                            capture_output=True)
             trees["base"] = base
+        common = [e for e in args.examples if all((tree / "examples" / f"{e}.json").exists() for tree in trees.values())]
+        skipped = sorted(set(args.examples) - set(common))
+        if skipped:
+            print(f"not in both trees, skipped: {', '.join(skipped)}", flush=True)
         try:
-            rows = compare(trees, args.examples, args.threads, args.repeats)
+            rows = compare(trees, common, args.threads, args.repeats)
         finally:
             if args.base:
                 subprocess.run(["git", "worktree", "remove", "--force", str(trees["base"])], cwd=ROOT, check=False)

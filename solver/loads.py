@@ -38,14 +38,9 @@ class BodyLoads:
             not isinstance(e, float) and any(v in REFERENCE for v in e.variables_used) for e in self.expressions
         )
         self._shared = self.gravity.reshape(1, dim).copy()
-
-    @property
-    def varies_by_particle(self) -> bool:
-        return bool(self.expressions)
-
-    @property
-    def any(self) -> bool:
-        return self.varies_by_particle or bool(np.any(self.gravity != 0.0))
+        # fixed for the run: read every step by the fused backend
+        self.varies_by_particle = bool(self.expressions)
+        self.any = self.varies_by_particle or bool(np.any(self.gravity != 0.0))
 
     def acceleration(self, particles, t: float) -> np.ndarray:
         """(n, dim) per particle, or (1, dim) when it is the same for all."""

@@ -30,19 +30,33 @@ class FusedPhases(Phases):
         apic_d = shape.REGISTRY[method.shape_function].apic_d
         # APIC's D_p^-1 per axis (unused without APIC); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
+        self._place_arguments()
+
+    def _place_arguments(self) -> None:
+        """What the kernels take that changes only when the grid or the particles are placed:
+        built once here, not at every call (on a few hundred particles the tuples, the
+        placeholder and the flags cost a tenth of a step)."""
+        sim = self.sim
+        dim = sim.scene.dimension
+        f = sim.frame
+        self._frame = (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset)
+        # C_p for APIC; a placeholder of the right type for the kernels otherwise
+        apic = sim.affine is not None
+        self._affine_matrix = sim.particles.extra["affine"] if apic else np.zeros((1, dim, dim))
+        self._bad = np.empty(sim.threads, dtype=np.int64)   # each block's first failing particle
+        affine, blend = fused.constant(apic), fused.constant(sim.flip_ratio > 0.0)
+        self._p2g_variant = (self._support, affine, fused.constant(sim.loads.any))
+        self._g2p_variants = {mode: (self._support, fused.constant(mode), affine, blend)
+                              for mode in (fused.USL, fused.REMAP, fused.KINEMATICS)}
 
     def weights(self) -> None:
         """Nothing to store: every kernel evaluates the weights it needs."""
 
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
-        p, g, f, c = sim.particles, sim.grid, sim.frame, sim.copies
-        bad = np.empty(sim.threads, dtype=np.int64)
-        self._kernels.p2g(
-            (self._support, fused.constant(sim.affine is not None), fused.constant(sim.loads.any)),
-            p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc,
-            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset),
-            g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+        p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
+        self._kernels.p2g(self._p2g_variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc,
+                          self._frame, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -65,20 +79,8 @@ class FusedPhases(Phases):
 
     def _g2p(self, dt: float, mode: int) -> None:
         sim = self.sim
-        p, g, f = sim.particles, sim.grid, sim.frame
-        bad = np.empty(sim.threads, dtype=np.int64)
-        self._kernels.g2p(
-            (self._support, fused.constant(mode), fused.constant(sim.affine is not None),
-             fused.constant(sim.flip_ratio > 0.0)),
-            p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume, p.volume0, sim.rate,
-            (f.lower, f.h, f.inv_h, f.cells, f.strides, f.offset), g.v_old, g.v_new, g.momentum,
-            sim.flip_ratio, dt, self._d_inv, sim.copies.momentum, bad)
+        p, g, bad = sim.particles, sim.grid, self._bad
+        self._kernels.g2p(self._g2p_variants[mode], p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume,
+                          p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, dt,
+                          self._d_inv, sim.copies.momentum, bad)
         sim.check_inversion(first_of(bad))
-
-    @property
-    def _affine_matrix(self) -> np.ndarray:
-        """C_p for APIC; a placeholder of the right type for the kernels otherwise."""
-        sim = self.sim
-        if sim.affine is not None:
-            return sim.particles.extra["affine"]
-        return np.zeros((1, sim.scene.dimension, sim.scene.dimension))

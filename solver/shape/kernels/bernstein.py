@@ -21,7 +21,6 @@ from numba import njit
 
 from solver.shape.kernels import tensor
 
-NODES = tensor.nodes_of("bernstein")   # the declared support (solver/shape/bernstein.py), as a constant
 
 
 
@@ -42,5 +41,9 @@ def axis(s, a, p, cells, inv_h, data, w1, g1):
     return 2 * e
 
 
+# the 1D function and the declared support (solver/shape/bernstein.py), as the tensor kernel takes them
+AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("bernstein")
+
+
 def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    return tensor.weights(axis, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    return tensor.weights(AXIS, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -16,7 +16,6 @@ from numba import njit
 
 from solver.shape.kernels import tensor
 
-NODES = tensor.nodes_of("cubic_bspline")   # the declared support (solver/shape/cubic_bspline.py), as a constant
 
 
 
@@ -70,5 +69,9 @@ def axis(s, a, p, cells, inv_h, data, w1, g1):
     return b
 
 
+# the 1D function and the declared support (solver/shape/cubic_bspline.py), as the tensor kernel takes them
+AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("cubic_bspline")
+
+
 def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    return tensor.weights(axis, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    return tensor.weights(AXIS, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -31,7 +31,6 @@ from numba import njit, prange
 
 from solver.shape.kernels import tensor
 
-NODES = tensor.nodes_of("gimp")   # the declared support (solver/shape/gimp.py), as a constant
 
 LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
 
@@ -104,7 +103,11 @@ def axis(s, a, p, cells, inv_h, length, w1, g1):
     return b
 
 
+# the 1D function and the declared support (solver/shape/gimp.py), as the tensor kernel takes them
+AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("gimp")
+
+
 def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """The shape-function interface with one more argument: `length` (n, dim), the
     current box sides l_p (capped at h)."""
-    return tensor.weights(axis, NODES, spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    return tensor.weights(AXIS, NODES, spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks)

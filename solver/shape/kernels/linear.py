@@ -10,7 +10,6 @@ from numba import njit
 
 from solver.shape.kernels import tensor
 
-NODES = tensor.nodes_of("linear")   # the declared support (solver/shape/linear.py), as a constant
 
 
 
@@ -28,5 +27,9 @@ def axis(s, a, p, cells, inv_h, data, w1, g1):
     return i
 
 
+# the 1D function and the declared support (solver/shape/linear.py), as the tensor kernel takes them
+AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("linear")
+
+
 def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    return tensor.weights(axis, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    return tensor.weights(AXIS, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

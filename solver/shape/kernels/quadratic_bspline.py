@@ -12,7 +12,6 @@ from numba import njit
 
 from solver.shape.kernels import tensor
 
-NODES = tensor.nodes_of("quadratic_bspline")   # the declared support (solver/shape/quadratic_bspline.py), as a constant
 
 _TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
@@ -33,5 +32,9 @@ def axis(s, a, p, cells, inv_h, data, w1, g1):
     return i
 
 
+# the 1D function and the declared support (solver/shape/quadratic_bspline.py), as the tensor kernel takes them
+AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("quadratic_bspline")
+
+
 def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    return tensor.weights(axis, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    return tensor.weights(AXIS, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -6,7 +6,7 @@ A shape function module gives its 1D function as a numba function
 
 of the position s along axis a in cells from the grid's lower end (cells: the
 axis's cell count, inv_h: 1/h, data: the function's per-particle data, e.g.
-GIMP's box sides, or NO_DATA). It fills w1[a, j] and g1[a, j] (the derivative,
+GIMP's box sides, or an empty array). It fills w1[a, j] and g1[a, j] (the derivative,
 already divided by h) for the `support` nodes first + j, and must test s itself
 (catching NaN). `weights` below does the rest for every module: the particle
 loop on the threads' blocks and the tensor products. The stencil node k has the
@@ -15,6 +15,9 @@ node order).
 """
 from __future__ import annotations
 
+from importlib import import_module
+
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -25,23 +28,31 @@ _SUPPORTS = {n: np.empty((0,) * n) for n in range(1, 6)}
 
 
 def nodes_of(module: str) -> np.ndarray:
-    """`support` of the support declared in solver/shape/<module>.py (the first name it declares)."""
-    from importlib import import_module
-    return support(import_module(f"solver.shape.{module}").SHAPE_FUNCTIONS[0].support)
+    """The support declared in solver/shape/<module>.py (its first name) as `weights` takes it:
+    an empty array of that rank, a compile-time constant of the kernel."""
+    support = import_module(f"solver.shape.{module}").SHAPE_FUNCTIONS[0].support
+    return _SUPPORTS[support]
 
 
-def support(nodes: int) -> np.ndarray:
-    """The nodes per axis as a compile-time constant of `weights`: an empty array of that many
-    dimensions (read as `.ndim`), so the small loops over them unroll as they did when each
-    module had its own kernel (a runtime count made the weights 2-5x slower)."""
-    return _SUPPORTS[nodes]
+class Typed:
+    """A numba function to pass to `weights` from Python, with its numba type made once:
+    numba makes the type of a function argument anew at every call (about 4 us, a
+    quarter of a small 1D step), but takes an object's `_numba_type_` as it is."""
+
+    def __init__(self, function):
+        self.function = function
+        self._numba_type_ = numba.typeof(function)
 
 
 @njit(parallel=True, cache=True)
 def weights(axis, nodes, spec, x, data, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """idx, w, dw of every particle (solver/shape/__init__.py); the first particle outside
-    the grid, or -1. numba compiles one specialisation per `axis` function."""
+    the grid, or -1. numba compiles one specialisation per `axis` function. `nodes`: an
+    empty array whose rank is the support, a compile-time constant (a runtime support made
+    the divisions of the tensor product cost 2-5x)."""
     dims = spec[0]
+    if nodes.ndim ** len(dims) != idx.shape[1]:
+        raise ValueError("the kernel's support does not match the stencil's (the declared support)")
     bounds = block_bounds(x.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
