@@ -642,6 +642,15 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         problems.append(("damping", f"is not supported yet with several processes "
                                     f"(parallel.processes = {scene.parallel.processes})"))
 
+    problems += _condition_problems(scene, length_ok)
+    if grid_ok:
+        problems += slab_problems(scene)
+    return problems
+
+
+def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
+    """Boundary conditions: vector lengths, faces that exist, one wall a face."""
+    problems: list[tuple[str, str]] = []
     walls: dict[str, int] = {}
     for i, condition in enumerate(scene.boundary_conditions):
         path = f"boundary_conditions[{i}]"
@@ -651,14 +660,12 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
             length_ok(f"{path}.velocity", condition.velocity)
         else:
             axis = "xyz".index(condition.face[0])
-            if axis >= dim:
-                problems.append((f"{path}.face", f"{condition.face!r} is not a face of a {dim}D grid"))
+            if axis >= scene.dimension:
+                problems.append((f"{path}.face", f"{condition.face!r} is not a face of a {scene.dimension}D grid"))
             elif condition.face in walls:
                 problems.append((f"{path}.face", f"face {condition.face!r} already has a wall "
                                                  f"(boundary_conditions[{walls[condition.face]}])"))
             walls.setdefault(condition.face, i)
-    if grid_ok:
-        problems += slab_problems(scene)
     return problems
 
 
