@@ -35,6 +35,12 @@ def documented(descriptions: dict[int, str]) -> dict[int | str, dict[str, Any]]:
     return {status: {"model": ErrorBody, "description": text} for status, text in descriptions.items()}
 
 
+def owned_resource(noun: str) -> dict[int | str, dict[str, Any]]:
+    """The error responses of a router of records that belong to their caller (jobs, sweeps)."""
+    return documented({401: "no valid API token (when the service has tokens)",
+                       404: f"no such {noun} (or not the caller's)", 422: "invalid parameters"})
+
+
 class ApiError(Exception):
     def __init__(self, status: int, code: str, message: str, details: Any = None,
                  headers: dict[str, str] | None = None):

@@ -18,15 +18,14 @@ from core.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
 from core.store import CursorError, JobStore, job_key
 from service import quotas, results
 from service.auth import caller, owns
-from service.errors import ApiError, documented, validation_error
+from service.errors import ApiError, documented, owned_resource, validation_error
 from service.scenes import check_scene, granted_processes
 from service.settings import ApiSettings
 from service.state import Services, services
 
 log = logging.getLogger("mpm.api")
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"],
-                   responses=documented({401: "no valid API token (when the service has tokens)",
-                                         404: "no such job (or not the caller's)", 422: "invalid parameters"}))
+                   responses=owned_resource("job"))
 
 
 class JobRequest(BaseModel):

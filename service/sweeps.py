@@ -13,14 +13,13 @@ from pydantic import BaseModel, ConfigDict, Field
 from core import sweeps
 from core.models import ACTIVE, FINISHED, SweepMode, SweepRecord, now_iso
 from service.auth import caller, owns
-from service.errors import ApiError, documented, validation_error
+from service.errors import ApiError, documented, owned_resource, validation_error
 from service.jobs import NewJob, checked_callback, new_job_from, remove_files, store_and_enqueue
 from service.state import Services, services
 
 log = logging.getLogger("mpm.api")
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"],
-                   responses=documented({401: "no valid API token (when the service has tokens)",
-                                         404: "no such sweep (or not the caller's)", 422: "invalid parameters"}))
+                   responses=owned_resource("sweep"))
 
 
 class SweepRequest(BaseModel):
