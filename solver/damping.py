@@ -49,7 +49,6 @@ class Damping:
     def __init__(self, spec):
         self.mode = LOCAL if spec.type == "local" else VISCOUS
         self.coefficient = float(spec.coefficient)
-
         self.force = np.zeros((0, 0))   # f_d of this step, per node
 
     def before_update(self, sim, dt: float) -> None:

@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, prange
 
 from solver import kernels
-from solver.threads import block_bounds, first_of
+from solver.threads import block_bounds
 
 
 # -- kernels ----------------------------------------------------------------------

@@ -7,7 +7,7 @@ import json
 import logging
 import shutil
 import time
-from datetime import datetime, timezone
+from datetime import datetime
 from pathlib import Path
 
 from core.disk import folder_bytes, human
