@@ -70,13 +70,15 @@ def _load(path: str | dict, processes: int | None = None, threads: int | None = 
     and ``parallel.threads`` overridden where given; None after printing errors."""
     from solver.scene import SceneError, load_scene
 
+    # a local command: a checkpoint's scene may read its files too (their names were made absolute)
+    files = Path.cwd() if isinstance(path, dict) else Path(path).resolve().parent
     try:
-        scene = load_scene(path if isinstance(path, dict) else Path(path))
+        scene = load_scene(path if isinstance(path, dict) else Path(path), files=files)
         given = {k: v for k, v in (("processes", processes), ("threads", threads)) if v is not None}
         if given:
             data = scene.model_dump(mode="json")
             data["parallel"] = {**(data.get("parallel") or {}), **given}
-            scene = load_scene(data)
+            scene = load_scene(data, files=files)
     except SceneError as error:
         _print_scene_errors("the checkpoint's scene" if isinstance(path, dict) else path, error)
         return None

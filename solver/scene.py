@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import (
     Field,
     PlainValidator,
+    PrivateAttr,
     Strict,
     ValidationError,
     ValidationInfo,
@@ -40,6 +41,7 @@ from solver import capabilities
 from solver import materials as material_registry
 from solver import shape as shape_functions
 from solver import geometry as geometry_shapes
+from solver import mesh as meshes
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
@@ -281,6 +283,60 @@ class PolygonGeometry(_Geometry):
         return vertices
 
 
+# Why a "file" cannot be read: the scene came as a document (the service's case), not as a file.
+FILES_REFUSED = ("a scene sent as a document cannot name a file (the service never opens a path named in "
+                 "a scene): send the file's bytes as \"data\" (base64) with its \"format\"; `mpm submit` "
+                 "and the SDK inline a local file")
+
+
+def files_folder(info: ValidationInfo) -> Path | None:
+    """The folder a scene's relative file names start from; None where files may not be read
+    (a scene validated without load_scene's `files`, as the service does)."""
+    folder = (info.context or {}).get("files")
+    return None if folder is None else Path(folder)
+
+
+class MeshGeometry(_Geometry):
+    """3D only: a closed triangle mesh (solver/mesh.py), from a file or base64 data."""
+
+    type: Literal["mesh"]
+    file: Annotated[str, Field(min_length=1)] | None = None   # STL or OBJ; relative to the scene file
+    data: str | None = None                                     # base64 of the file's bytes
+    format: Literal[meshes.FORMATS] | None = None               # with data; a file's suffix otherwise
+    scale: Positive = 1.0
+    translate: Annotated[list[Real], Field(min_length=3, max_length=3)] = Field(default_factory=lambda: [0.0] * 3)
+
+    _mesh: meshes.Mesh | None = PrivateAttr(None)
+
+    @model_validator(mode="after")
+    def _read(self, info: ValidationInfo) -> "MeshGeometry":
+        if (self.file is None) == (self.data is None):
+            raise problems_at([("file", "give either file (a path) or data (base64), not both")
+                               if self.file is not None else ("data", "give file (a path) or data (base64)")])
+        source, raw = ("data", None) if self.data is not None else ("file", None)
+        fmt = self.format or (meshes.format_of(self.file) if self.file is not None else None)
+        if fmt is None:
+            raise problems_at([("format", f"required: one of {list(meshes.FORMATS)}"
+                                          + (" (the file's suffix names none)" if self.file else ""))])
+        limit = meshes.max_mesh_bytes()
+        try:
+            if self.data is not None:
+                raw = meshes.decode_data(self.data, limit)
+            else:
+                folder = files_folder(info)
+                if folder is None:
+                    raise problems_at([("file", FILES_REFUSED)])
+                self.file = str((folder / self.file).resolve())   # the scene can be reloaded from anywhere
+                raw = meshes.read_file(self.file, limit)
+            self._mesh = meshes.load(raw, fmt, self.scale, self.translate)
+        except meshes.MeshError as exc:
+            raise problems_at([(source, str(exc))]) from None
+        return self
+
+    def shape(self) -> meshes.Mesh:
+        return self._mesh
+
+
 class UnionGeometry(_Geometry):
     type: Literal["union"]
     parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
@@ -299,8 +355,8 @@ class IntersectionGeometry(_Geometry):
 
 
 GeometrySpec = Annotated[
-    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, UnionGeometry, DifferenceGeometry,
-          IntersectionGeometry],
+    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, MeshGeometry, UnionGeometry,
+          DifferenceGeometry, IntersectionGeometry],
     Field(discriminator="type"),
 ]
 for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
@@ -699,6 +755,9 @@ def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str,
     if isinstance(spec, PolygonGeometry) and dim != 2:
         problems.append((f"{path}.type", f"a polygon is a 2D geometry; this scene is {dim}D"))
         return False
+    if isinstance(spec, MeshGeometry) and dim != 3:
+        problems.append((f"{path}.type", f"a mesh is a 3D geometry; this scene is {dim}D (use a polygon in 2D)"))
+        return False
     ok = True
     for name in ("lower", "upper", "center"):
         values = getattr(spec, name, None)
@@ -787,16 +846,23 @@ class Limits:
 MACHINE_LIMITS = Limits(max_particles=10**8, max_grid_nodes=10**9)
 
 
-def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None) -> Scene:
+def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None,
+               files: "str | Path | None" = None) -> Scene:
     """Validate a scene given as a path to a JSON file, JSON text, a dict or a Scene.
+
+    `files`: the folder the scene's relative file names (mesh files) start from; a scene
+    read from a file reads them beside it. Without it a scene given as a document may not
+    name files at all (what the service relies on: it never opens a path named in a scene).
 
     Raises SceneError listing every problem found."""
     if isinstance(source, Scene):
         scene = source
     else:
         data = _read(source)
+        if files is None and _is_path(source):
+            files = Path(source).resolve().parent
         try:
-            scene = Scene.model_validate(data)
+            scene = Scene.model_validate(data, context={"files": files})
         except ValidationError as exc:
             raise SceneError(_format_errors(exc, data)) from None
     if limits is not None:
@@ -806,10 +872,14 @@ def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None
     return scene
 
 
+def _is_path(source: Any) -> bool:
+    return isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith(("{", "[")))
+
+
 def _read(source: Any) -> dict:
     if isinstance(source, dict):
         return source
-    if isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith(("{", "["))):
+    if _is_path(source):
         try:
             text = Path(source).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
