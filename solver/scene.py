@@ -42,6 +42,7 @@ from solver import materials as material_registry
 from solver import shape as shape_functions
 from solver import geometry as geometry_shapes
 from solver import mesh as meshes
+from solver import points as point_sets
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
@@ -337,6 +338,46 @@ class MeshGeometry(_Geometry):
         return self._mesh
 
 
+class PointsGeometry(_Geometry):
+    """A body given as its particles (solver/points.py): positions and volumes, or a CSV /
+    HDF5 file of them (x, y[, z], volume). Only as a body's whole geometry."""
+
+    type: Literal["points"]
+    positions: Annotated[list[Annotated[list[Real], Field(min_length=1, max_length=3)]], Field(min_length=1)] | None = None
+    volumes: Annotated[list[Positive], Field(min_length=1)] | None = None
+    file: Annotated[str, Field(min_length=1)] | None = None   # .csv, .h5 or .hdf5; relative to the scene file
+
+    _points: point_sets.Points | None = PrivateAttr(None)
+
+    @model_validator(mode="after")
+    def _read(self, info: ValidationInfo) -> "PointsGeometry":
+        inline = self.positions is not None or self.volumes is not None
+        if inline == (self.file is not None):
+            raise problems_at([("file", "give either file or positions and volumes, not both") if inline
+                               else ("positions", "give positions and volumes, or file")])
+        try:
+            if inline:
+                if self.positions is None or self.volumes is None:
+                    raise problems_at([("volumes" if self.volumes is None else "positions", "required with "
+                                        + ("positions" if self.volumes is None else "volumes"))])
+                if len({len(p) for p in self.positions}) != 1:
+                    raise problems_at([("positions", "every position needs the same number of components")])
+                self._points = point_sets.from_lists(self.positions, self.volumes)
+            else:
+                folder = files_folder(info)
+                if folder is None:
+                    raise problems_at([("file", FILES_REFUSED.replace(
+                        "send the file's bytes as \"data\" (base64) with its \"format\"", "send positions and volumes"))])
+                self.file = str((folder / self.file).resolve())
+                self._points = point_sets.from_file(self.file, meshes.max_mesh_bytes())
+        except meshes.MeshError as exc:
+            raise problems_at([("file" if self.file else "volumes", str(exc))]) from None
+        return self
+
+    def shape(self) -> point_sets.Points:
+        return self._points
+
+
 class UnionGeometry(_Geometry):
     type: Literal["union"]
     parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
@@ -355,8 +396,8 @@ class IntersectionGeometry(_Geometry):
 
 
 GeometrySpec = Annotated[
-    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, MeshGeometry, UnionGeometry,
-          DifferenceGeometry, IntersectionGeometry],
+    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, MeshGeometry, PointsGeometry,
+          UnionGeometry, DifferenceGeometry, IntersectionGeometry],
     Field(discriminator="type"),
 ]
 for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
@@ -737,6 +778,9 @@ def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_o
         elif isinstance(scene.materials.get(scene.bodies[body].material), Rigid):
             problems.append((f"{path}.body", f"{load.body!r} is a rigid body: it moves as prescribed, a load "
                                              "does not act on it"))
+        elif load.type == "traction" and scene.bodies[body].geometry.type == "points":
+            problems.append((f"{path}.type", f"{load.body!r} is given as points: a traction needs the surface "
+                                             "of a body seeded on the lattice; use a force"))
         length_ok(f"{path}.where.lower", load.where.lower)
         length_ok(f"{path}.where.upper", load.where.upper)
         if length_ok(f"{path}.{load.type}", load.vector):
@@ -748,7 +792,16 @@ def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str,
     """Check vector lengths of a geometry tree against ``dim``; True if all fit."""
     if isinstance(spec, (UnionGeometry, DifferenceGeometry, IntersectionGeometry)):
         results = [_geometry_problems(f"{path}.parts[{i}]", part, dim, problems) for i, part in enumerate(spec.parts)]
+        for i, part in enumerate(spec.parts):
+            if isinstance(part, PointsGeometry):
+                problems.append((f"{path}.parts[{i}].type", "points are a body's particles, not a region: "
+                                                            "they cannot be combined with other geometries"))
+                results.append(False)
         return all(results)
+    if isinstance(spec, PointsGeometry) and spec.shape().positions.shape[1] != dim:
+        problems.append((f"{path}.{'positions' if spec.file is None else 'file'}",
+                         f"the points have {spec.shape().positions.shape[1]} coordinates; the scene is {dim}D"))
+        return False
     if isinstance(spec, CylinderGeometry) and dim != 3:
         problems.append((f"{path}.type", f"a cylinder is a 3D geometry; in {dim}D use a sphere or a box"))
         return False

@@ -6,8 +6,9 @@ installed), JSON text, or any pydantic model such as the solver's ``Scene``
 
 The service never opens a path named in a scene, so a geometry that names a local
 file (``{"type": "mesh", "file": "part.stl"}``) is sent with the file's bytes inlined
-as ``"data"`` (base64) and its ``"format"``: names relative to the scene file, or to
-the current folder for a scene given as a dict.
+as ``"data"`` (base64) and its ``"format"``, a points file (CSV, or HDF5 with h5py
+installed) as its ``"positions"`` and ``"volumes"``: names relative to the scene
+file, or to the current folder for a scene given as a dict.
 """
 from __future__ import annotations
 
@@ -74,6 +75,8 @@ def inline_files(document: Any, folder: Path) -> Any:
     items = {key: inline_files(value, folder) for key, value in document.items()}
     if items.get("type") == "mesh" and isinstance(items.get("file"), str):
         items = _inline_mesh(items, folder)
+    if items.get("type") == "points" and isinstance(items.get("file"), str):
+        items = _inline_points(items, folder)
     return items
 
 
@@ -88,4 +91,32 @@ def _inline_mesh(geometry: dict, folder: Path) -> dict:
         raise FileNotFoundError(f"mesh file {path}: {exc.strerror or exc}") from None
     inlined = {key: value for key, value in geometry.items() if key != "file"}
     inlined.update(data=base64.b64encode(raw).decode("ascii"), format=fmt)
+    return inlined
+
+
+def _inline_points(geometry: dict, folder: Path) -> dict:
+    """{"type": "points", "file": F} -> positions and volumes read from F's columns x, y[, z], volume."""
+    path = folder / geometry["file"]
+    if not path.is_file():
+        raise FileNotFoundError(f"points file not found: {path}")
+    if path.suffix.lower() == ".csv":
+        import csv
+
+        with path.open(newline="", encoding="utf-8") as handle:
+            rows = list(csv.reader(handle))
+        names = [name.strip().lower() for name in rows[0]] if rows else []
+        columns = {name: [float(row[k]) for row in rows[1:] if row] for k, name in enumerate(names)}
+    else:
+        try:
+            import h5py  # optional: the SDK depends only on httpx and pydantic
+        except ImportError:
+            raise ValueError(f"{path}: reading an HDF5 points file needs h5py (pip install h5py)") from None
+        with h5py.File(path, "r") as handle:
+            columns = {name: [float(v) for v in handle[name][()].ravel()] for name in ("x", "y", "z", "volume")
+                       if name in handle}
+    axes = [name for name in ("x", "y", "z") if name in columns]
+    if "volume" not in columns or not axes:
+        raise ValueError(f"{path}: a points file needs columns x, y[, z] and volume")
+    inlined = {key: value for key, value in geometry.items() if key != "file"}
+    inlined.update(positions=[list(p) for p in zip(*(columns[a] for a in axes))], volumes=columns["volume"])
     return inlined
