@@ -1,7 +1,7 @@
 """The dashboard in headless Chromium against a live service: submit through the
 form and watch the job succeed, its preview and energy plot, cancel a long job,
 validation errors next to their fields, the status filter, download and delete,
-the lost-connection banner and the polling back-off."""
+the lost-connection banner and the polling back-off, a mesh file attached beside the scene."""
 from __future__ import annotations
 
 import json
