@@ -332,7 +332,10 @@ class _Translator:
 
     def eos_strength(self, eos_name: str, strength_name: str, damage_name: str | None = None) -> dict:
         (eos, e), (strength, s) = self._part("eos", eos_name), self._part("strength", strength_name)
-        n = lambda values: [self.number(v, f"a constant of {eos_name}/{strength_name}") for v in values]   # noqa: E731
+
+        def n(values: list[str]) -> list[float]:
+            return [self.number(v, f"a constant of {eos_name}/{strength_name}") for v in values]
+
         if (eos, strength) == ("fluid", "fluid") and len(e) == 3 and len(s) == 1 and damage_name is None:
             rho, k, gamma = n(e)
             return {"model": "fluid", "density": rho, "bulk_modulus": k, "gamma": gamma, "viscosity": n(s)[0]}

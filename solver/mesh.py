@@ -31,7 +31,11 @@ BINARY_STL_HEADER = 84                # 80 bytes of text, a uint32 count
 BINARY_STL_RECORD = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 
 
-class MeshError(ValueError):
+class GeometryFileError(ValueError):
+    """A geometry's file or data that cannot be used (too large, unreadable, not base64)."""
+
+
+class MeshError(GeometryFileError):
     """A mesh that cannot be a body: the message says what is wrong with it."""
 
 
@@ -50,25 +54,26 @@ def format_of(path: str) -> str | None:
 def decode_data(data: str, limit: int) -> bytes:
     """The bytes of a base64 string, refused before decoding when they would exceed `limit`."""
     if len(data) // 4 * 3 > limit + 3:
-        raise MeshError(f"the mesh data ({len(data) // 4 * 3} bytes decoded) is larger than the limit of "
+        raise GeometryFileError(f"the mesh data ({len(data) // 4 * 3} bytes decoded) is larger than the limit of "
                         f"{limit} bytes (MPM_MAX_MESH_BYTES)")
     try:
         return base64.b64decode(data, validate=True)
     except (binascii.Error, ValueError) as exc:
-        raise MeshError(f"does not decode as base64: {exc}") from None
+        raise GeometryFileError(f"does not decode as base64: {exc}") from None
 
 
-def read_file(path: str, limit: int) -> bytes:
-    """The bytes of a mesh file, refused before reading when larger than `limit`."""
+def read_file(path: str, limit: int, kind: str = "mesh") -> bytes:
+    """The bytes of a geometry's file (`kind`: mesh, points), refused before reading when
+    larger than `limit`."""
     try:
         size = os.path.getsize(path)
         if size > limit:
-            raise MeshError(f"the mesh file {path!r} ({size} bytes) is larger than the limit of {limit} "
-                            "bytes (MPM_MAX_MESH_BYTES)")
+            raise GeometryFileError(f"the {kind} file {path!r} ({size} bytes) is larger than the limit of {limit} "
+                                    "bytes (MPM_MAX_MESH_BYTES)")
         with open(path, "rb") as handle:
             return handle.read(limit + 1)
     except OSError as exc:
-        raise MeshError(f"cannot read the mesh file {path!r}: {exc.strerror or exc}") from None
+        raise GeometryFileError(f"cannot read the {kind} file {path!r}: {exc.strerror or exc}") from None
 
 
 def read_triangles(raw: bytes, fmt: str) -> np.ndarray:

@@ -12,13 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from solver.mesh import MeshError, read_file
+from solver.mesh import GeometryFileError, read_file
 
 FORMATS = {".csv": "csv", ".h5": "hdf5", ".hdf5": "hdf5"}
 AXES = ("x", "y", "z")
 
 
-class PointsError(MeshError):
+class PointsError(GeometryFileError):
     """A points file or list that cannot be a body (the message says why)."""
 
 
@@ -46,7 +46,7 @@ def from_file(path: str, limit: int) -> Points:
     kind = FORMATS.get(os.path.splitext(path)[1].lower())
     if kind is None:
         raise PointsError(f"{path!r}: a points file is .csv, .h5 or .hdf5")
-    raw = read_file(path, limit)
+    raw = read_file(path, limit, kind="points")
     columns = _csv_columns(raw) if kind == "csv" else _hdf5_columns(raw)
     axes = [name for name in AXES if name in columns]
     if "volume" not in columns or axes != list(AXES[:len(axes)]) or len(axes) < 1:

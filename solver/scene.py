@@ -330,7 +330,7 @@ class MeshGeometry(_Geometry):
                 self.file = str((folder / self.file).resolve())   # the scene can be reloaded from anywhere
                 raw = meshes.read_file(self.file, limit)
             self._mesh = meshes.load(raw, fmt, self.scale, self.translate)
-        except meshes.MeshError as exc:
+        except meshes.GeometryFileError as exc:
             raise problems_at([(source, str(exc))]) from None
         return self
 
@@ -370,7 +370,7 @@ class PointsGeometry(_Geometry):
                         "send the file's bytes as \"data\" (base64) with its \"format\"", "send positions and volumes"))])
                 self.file = str((folder / self.file).resolve())
                 self._points = point_sets.from_file(self.file, meshes.max_mesh_bytes())
-        except meshes.MeshError as exc:
+        except meshes.GeometryFileError as exc:
             raise problems_at([("file" if self.file else "volumes", str(exc))]) from None
         return self
 

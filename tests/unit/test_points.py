@@ -85,3 +85,19 @@ def test_a_points_body_runs(tmp_path):
         last = handle["frames"][sorted(handle["frames"])[-1]]
         assert np.allclose(last["mass"][:], 1000 * np.array(VOLUMES))
         assert np.allclose(last["position"][:, 0], np.array(POSITIONS)[:, 0] + 0.01)   # free flight at 1 m/s
+
+
+def test_a_points_file_over_the_limit_or_without_its_columns(tmp_path, monkeypatch):
+    (tmp_path / "cloud.csv").write_text("x,y,volume\n" + "0.5,0.5,0.001\n" * 100)
+    (tmp_path / "bare.csv").write_text("x,y\n0.5,0.5\n")
+    for name in ("cloud", "bare"):
+        (tmp_path / f"{name}.json").write_text(json.dumps(points_scene({"type": "points", "file": f"{name}.csv"})))
+    with pytest.raises(SceneError) as caught:
+        load_scene(tmp_path / "bare.json")
+    assert caught.value.errors[0]["path"] == "bodies[0].geometry.file"
+    assert "needs columns x, y[, z] and volume; it has ['x', 'y']" in caught.value.errors[0]["message"]
+    monkeypatch.setenv("MPM_MAX_MESH_BYTES", "1000")
+    with pytest.raises(SceneError) as caught:
+        load_scene(tmp_path / "cloud.json")
+    assert "the points file" in caught.value.errors[0]["message"]
+    assert "larger than the limit of 1000 bytes (MPM_MAX_MESH_BYTES)" in caught.value.errors[0]["message"]
