@@ -407,8 +407,9 @@ class _Translator:
         elif kind == "body_force" and arguments[:1] == ["all"]:
             self.body_force(arguments[1:])
         else:
-            raise _Skip(f"fix {kind!r}" + (" (a force on each node of a group; the scene's force loads act on "
-                                           "particles)" if kind == "force_nodes" else ": no scene equivalent"))
+            raise _Skip(f"fix {kind!r}" + (" (a total force shared equally by the group's nodes; the scene's "
+                                           "force load shares it by mass among particles: the same total, "
+                                           "another load)" if kind == "force_nodes" else ": no scene equivalent"))
 
     def cmd_compute(self, a: list[str]) -> None:
         self.outputs[a[0]] = f"compute {a[0]!r}"
