@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterable, Iterator, Set
 FORMULATIONS = frozenset({"ulmpm", "tlmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
 TRANSFERS = frozenset({"flip", "pic", "apic"})
-GEOMETRIES = frozenset({"box", "sphere", "cylinder", "polygon", "union", "difference", "intersection"})
+GEOMETRIES = frozenset({"box", "sphere", "cylinder", "polygon", "mesh", "points", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall"})
 WALL_MODES = frozenset({"stick", "slip"})
 AXISYMMETRIC = True

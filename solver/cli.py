@@ -70,13 +70,15 @@ def _load(path: str | dict, processes: int | None = None, threads: int | None = 
     and ``parallel.threads`` overridden where given; None after printing errors."""
     from solver.scene import SceneError, load_scene
 
+    # a local command: a checkpoint's scene may read its files too (their names were made absolute)
+    files = Path.cwd() if isinstance(path, dict) else Path(path).resolve().parent
     try:
-        scene = load_scene(path if isinstance(path, dict) else Path(path))
+        scene = load_scene(path if isinstance(path, dict) else Path(path), files=files)
         given = {k: v for k, v in (("processes", processes), ("threads", threads)) if v is not None}
         if given:
             data = scene.model_dump(mode="json")
             data["parallel"] = {**(data.get("parallel") or {}), **given}
-            scene = load_scene(data)
+            scene = load_scene(data, files=files)
     except SceneError as error:
         _print_scene_errors("the checkpoint's scene" if isinstance(path, dict) else path, error)
         return None
@@ -317,6 +319,48 @@ def cmd_examples(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# -- mpm import ----------------------------------------------------------------
+
+
+def register_import(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "import", help="translate another code's input file into a scene",
+        description="Translate a Karamelo input file into a scene (JSON). Every line that has no "
+                    "translation is listed on stderr with its number and the reason; nothing is guessed. "
+                    "Exit 0: all translated and the scene is valid; 3: lines left out, the scene valid; "
+                    "2: the scene is not valid (written anyway, to finish by hand); 1: the file cannot be read.",
+    )
+    parser.add_argument("format", choices=["karamelo"], help="the input file's code")
+    parser.add_argument("file", help="the input file (.mpm)")
+    parser.add_argument("-o", "--output", metavar="SCENE", help="scene file to write (default: stdout)")
+    parser.set_defaults(func=cmd_import)
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    from solver.karamelo import KarameloError, translate_file
+    from solver.scene import SceneError, load_scene
+
+    try:
+        translation = translate_file(args.file)
+    except (OSError, UnicodeDecodeError, KarameloError) as error:
+        print(f"mpm import: {args.file}: {error}", file=sys.stderr)
+        return EXIT_ERROR
+    text = json.dumps(translation.scene, indent=2) + "\n"
+    if args.output:
+        Path(args.output).write_text(text, encoding="utf-8")
+    else:
+        sys.stdout.write(text)
+    for item in translation.untranslated:
+        print(f"{args.file}:{item.line}: not translated: {item.text}: {item.reason}" if item.text
+              else f"{args.file}:{item.line}: {item.reason}", file=sys.stderr)
+    try:
+        load_scene(translation.scene)
+    except SceneError as error:
+        _print_scene_errors(args.output or "the translated scene", error)
+        return EXIT_INVALID
+    return EXIT_PARTIAL if translation.untranslated else EXIT_OK
+
+
 # -- the command -------------------------------------------------------------
 
 BUILTINS = {
@@ -324,6 +368,7 @@ BUILTINS = {
     "validate": register_validate,
     "preview": register_preview,
     "examples": register_examples,
+    "import": register_import,
 }
 
 

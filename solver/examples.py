@@ -48,7 +48,8 @@ def list_examples() -> list[dict[str, Any]]:
 
 
 def load_example(name: str) -> dict[str, Any]:
-    """The scene document of one example.
+    """The scene document of one example, its mesh files inlined as data (a document
+    the service accepts: it never opens a path named in a scene).
 
     Only names from :func:`list_examples` are accepted, so a name can never
     reach outside the examples folder.
@@ -58,4 +59,7 @@ def load_example(name: str) -> dict[str, Any]:
         raise ExampleNotFound(
             f"no example named {name!r}; available: {', '.join(sorted(known)) or 'none'}"
         )
-    return _read(Path(known[name]["path"]))
+    from solver.mesh import inline_files
+
+    path = Path(known[name]["path"])
+    return inline_files(_read(path), path.parent)

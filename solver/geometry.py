@@ -236,6 +236,8 @@ def from_spec(spec) -> Geometry:
         return Sphere(_vector(spec.center), float(spec.radius))
     if kind == "polygon":
         return Polygon(np.asarray(spec.vertices, dtype=np.float64).reshape(-1, 2))
+    if kind in ("mesh", "points"):
+        return spec.shape()   # read and checked once, when the scene was validated
     if kind == "cylinder":
         return Cylinder(_vector(spec.center), float(spec.radius), int(spec.axis), float(spec.height))
     parts = tuple(from_spec(part) for part in spec.parts)

@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import (
     Field,
     PlainValidator,
+    PrivateAttr,
     Strict,
     ValidationError,
     ValidationInfo,
@@ -40,6 +41,8 @@ from solver import capabilities
 from solver import materials as material_registry
 from solver import shape as shape_functions
 from solver import geometry as geometry_shapes
+from solver import mesh as meshes
+from solver import points as point_sets
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
@@ -281,6 +284,100 @@ class PolygonGeometry(_Geometry):
         return vertices
 
 
+# Why a "file" cannot be read: the scene came as a document (the service's case), not as a file.
+FILES_REFUSED = ("a scene sent as a document cannot name a file (the service never opens a path named in "
+                 "a scene): send the file's bytes as \"data\" (base64) with its \"format\"; `mpm submit` "
+                 "and the SDK inline a local file")
+
+
+def files_folder(info: ValidationInfo) -> Path | None:
+    """The folder a scene's relative file names start from; None where files may not be read
+    (a scene validated without load_scene's `files`, as the service does)."""
+    folder = (info.context or {}).get("files")
+    return None if folder is None else Path(folder)
+
+
+class MeshGeometry(_Geometry):
+    """3D only: a closed triangle mesh (solver/mesh.py), from a file or base64 data."""
+
+    type: Literal["mesh"]
+    file: Annotated[str, Field(min_length=1)] | None = None   # STL or OBJ; relative to the scene file
+    data: str | None = None                                     # base64 of the file's bytes
+    format: Literal[meshes.FORMATS] | None = None               # with data; a file's suffix otherwise
+    scale: Positive = 1.0
+    translate: Annotated[list[Real], Field(min_length=3, max_length=3)] = Field(default_factory=lambda: [0.0] * 3)
+
+    _mesh: meshes.Mesh | None = PrivateAttr(None)
+
+    @model_validator(mode="after")
+    def _read(self, info: ValidationInfo) -> "MeshGeometry":
+        if (self.file is None) == (self.data is None):
+            raise problems_at([("file", "give either file (a path) or data (base64), not both")
+                               if self.file is not None else ("data", "give file (a path) or data (base64)")])
+        source, raw = ("data", None) if self.data is not None else ("file", None)
+        fmt = self.format or (meshes.format_of(self.file) if self.file is not None else None)
+        if fmt is None:
+            raise problems_at([("format", f"required: one of {list(meshes.FORMATS)}"
+                                          + (" (the file's suffix names none)" if self.file else ""))])
+        limit = meshes.max_mesh_bytes()
+        try:
+            if self.data is not None:
+                raw = meshes.decode_data(self.data, limit)
+            else:
+                folder = files_folder(info)
+                if folder is None:
+                    raise problems_at([("file", FILES_REFUSED)])
+                self.file = str((folder / self.file).resolve())   # the scene can be reloaded from anywhere
+                raw = meshes.read_file(self.file, limit)
+            self._mesh = meshes.load(raw, fmt, self.scale, self.translate)
+        except meshes.GeometryFileError as exc:
+            raise problems_at([(source, str(exc))]) from None
+        return self
+
+    def shape(self) -> meshes.Mesh:
+        return self._mesh
+
+
+class PointsGeometry(_Geometry):
+    """A body given as its particles (solver/points.py): positions and volumes, or a CSV /
+    HDF5 file of them (x, y[, z], volume). Only as a body's whole geometry."""
+
+    type: Literal["points"]
+    positions: Annotated[list[Annotated[list[Real], Field(min_length=1, max_length=3)]], Field(min_length=1)] | None = None
+    volumes: Annotated[list[Positive], Field(min_length=1)] | None = None
+    file: Annotated[str, Field(min_length=1)] | None = None   # .csv, .h5 or .hdf5; relative to the scene file
+
+    _points: point_sets.Points | None = PrivateAttr(None)
+
+    @model_validator(mode="after")
+    def _read(self, info: ValidationInfo) -> "PointsGeometry":
+        inline = self.positions is not None or self.volumes is not None
+        if inline == (self.file is not None):
+            raise problems_at([("file", "give either file or positions and volumes, not both") if inline
+                               else ("positions", "give positions and volumes, or file")])
+        try:
+            if inline:
+                if self.positions is None or self.volumes is None:
+                    raise problems_at([("volumes" if self.volumes is None else "positions", "required with "
+                                        + ("positions" if self.volumes is None else "volumes"))])
+                if len({len(p) for p in self.positions}) != 1:
+                    raise problems_at([("positions", "every position needs the same number of components")])
+                self._points = point_sets.from_lists(self.positions, self.volumes)
+            else:
+                folder = files_folder(info)
+                if folder is None:
+                    raise problems_at([("file", FILES_REFUSED.replace(
+                        "send the file's bytes as \"data\" (base64) with its \"format\"", "send positions and volumes"))])
+                self.file = str((folder / self.file).resolve())
+                self._points = point_sets.from_file(self.file, meshes.max_mesh_bytes())
+        except meshes.GeometryFileError as exc:
+            raise problems_at([("file" if self.file else "volumes", str(exc))]) from None
+        return self
+
+    def shape(self) -> point_sets.Points:
+        return self._points
+
+
 class UnionGeometry(_Geometry):
     type: Literal["union"]
     parts: Annotated[list["GeometrySpec"], Field(min_length=1)]
@@ -299,8 +396,8 @@ class IntersectionGeometry(_Geometry):
 
 
 GeometrySpec = Annotated[
-    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, UnionGeometry, DifferenceGeometry,
-          IntersectionGeometry],
+    Union[BoxGeometry, SphereGeometry, CylinderGeometry, PolygonGeometry, MeshGeometry, PointsGeometry,
+          UnionGeometry, DifferenceGeometry, IntersectionGeometry],
     Field(discriminator="type"),
 ]
 for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
@@ -681,6 +778,9 @@ def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_o
         elif isinstance(scene.materials.get(scene.bodies[body].material), Rigid):
             problems.append((f"{path}.body", f"{load.body!r} is a rigid body: it moves as prescribed, a load "
                                              "does not act on it"))
+        elif load.type == "traction" and scene.bodies[body].geometry.type == "points":
+            problems.append((f"{path}.type", f"{load.body!r} is given as points: a traction needs the surface "
+                                             "of a body seeded on the lattice; use a force"))
         length_ok(f"{path}.where.lower", load.where.lower)
         length_ok(f"{path}.where.upper", load.where.upper)
         if length_ok(f"{path}.{load.type}", load.vector):
@@ -692,12 +792,24 @@ def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str,
     """Check vector lengths of a geometry tree against ``dim``; True if all fit."""
     if isinstance(spec, (UnionGeometry, DifferenceGeometry, IntersectionGeometry)):
         results = [_geometry_problems(f"{path}.parts[{i}]", part, dim, problems) for i, part in enumerate(spec.parts)]
+        for i, part in enumerate(spec.parts):
+            if isinstance(part, PointsGeometry):
+                problems.append((f"{path}.parts[{i}].type", "points are a body's particles, not a region: "
+                                                            "they cannot be combined with other geometries"))
+                results.append(False)
         return all(results)
+    if isinstance(spec, PointsGeometry) and spec.shape().positions.shape[1] != dim:
+        problems.append((f"{path}.{'positions' if spec.file is None else 'file'}",
+                         f"the points have {spec.shape().positions.shape[1]} coordinates; the scene is {dim}D"))
+        return False
     if isinstance(spec, CylinderGeometry) and dim != 3:
         problems.append((f"{path}.type", f"a cylinder is a 3D geometry; in {dim}D use a sphere or a box"))
         return False
     if isinstance(spec, PolygonGeometry) and dim != 2:
         problems.append((f"{path}.type", f"a polygon is a 2D geometry; this scene is {dim}D"))
+        return False
+    if isinstance(spec, MeshGeometry) and dim != 3:
+        problems.append((f"{path}.type", f"a mesh is a 3D geometry; this scene is {dim}D (use a polygon in 2D)"))
         return False
     ok = True
     for name in ("lower", "upper", "center"):
@@ -787,16 +899,23 @@ class Limits:
 MACHINE_LIMITS = Limits(max_particles=10**8, max_grid_nodes=10**9)
 
 
-def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None) -> Scene:
+def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None,
+               files: "str | Path | None" = None) -> Scene:
     """Validate a scene given as a path to a JSON file, JSON text, a dict or a Scene.
+
+    `files`: the folder the scene's relative file names (mesh files) start from; a scene
+    read from a file reads them beside it. Without it a scene given as a document may not
+    name files at all (what the service relies on: it never opens a path named in a scene).
 
     Raises SceneError listing every problem found."""
     if isinstance(source, Scene):
         scene = source
     else:
         data = _read(source)
+        if files is None and _is_path(source):
+            files = Path(source).resolve().parent
         try:
-            scene = Scene.model_validate(data)
+            scene = Scene.model_validate(data, context={"files": files})
         except ValidationError as exc:
             raise SceneError(_format_errors(exc, data)) from None
     if limits is not None:
@@ -806,10 +925,14 @@ def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None
     return scene
 
 
+def _is_path(source: Any) -> bool:
+    return isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith(("{", "[")))
+
+
 def _read(source: Any) -> dict:
     if isinstance(source, dict):
         return source
-    if isinstance(source, Path) or (isinstance(source, str) and not source.lstrip().startswith(("{", "["))):
+    if _is_path(source):
         try:
             text = Path(source).read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:

@@ -5,6 +5,9 @@ For each body, every grid cell that overlaps the body's bounding box gets
 axis; the particles inside the body's geometry are kept. Each particle's volume
 is the cell volume divided by ppc**dim.
 
+A body whose geometry is `points` (solver/points.py) is its particles as given:
+positions and volumes, no lattice.
+
 Candidates are visited in chunks of bounded size, so memory stays bounded while
 counting, and while seeding holds only the kept particles.
 """
@@ -36,10 +39,15 @@ class Seeds:
 def seed(scene: Scene) -> Seeds:
     positions, volumes, bodies = [], [], []
     for index, body in enumerate(scene.bodies):
-        kept = [points[inside] for points, inside in _inside_chunks(scene, body)]
-        points = np.concatenate(kept) if kept else np.empty((0, scene.dimension))
+        given = _given_points(body)
+        if given is not None:
+            points = given.positions
+            volumes.append(given.volumes)
+        else:
+            kept = [points[inside] for points, inside in _inside_chunks(scene, body)]
+            points = np.concatenate(kept) if kept else np.empty((0, scene.dimension))
+            volumes.append(np.full(len(points), particle_volume(scene, body)))
         positions.append(points)
-        volumes.append(np.full(len(points), particle_volume(scene, body)))
         bodies.append(np.full(len(points), index, dtype=np.int32))
     return Seeds(
         position=np.ascontiguousarray(np.concatenate(positions), dtype=np.float64),
@@ -55,11 +63,20 @@ def count_particles(scene: Scene, *, stop_above: int | None = None) -> list[int]
     checks); the counts are then lower bounds whose sum exceeds ``stop_above``."""
     counts = [0] * len(scene.bodies)
     for index, body in enumerate(scene.bodies):
+        given = _given_points(body)
+        if given is not None:
+            counts[index] = len(given.volumes)
+            continue
         for _, inside in _inside_chunks(scene, body, spread=stop_above is not None):
             counts[index] += int(np.count_nonzero(inside))
             if stop_above is not None and sum(counts) > stop_above:
                 return counts
     return counts
+
+
+def _given_points(body: Body):
+    """The Points of a body given as particles, else None."""
+    return body.geometry.shape() if body.geometry.type == "points" else None
 
 
 def particle_volume(scene: Scene, body: Body) -> float:
@@ -85,6 +102,10 @@ def count_candidates(scene: Scene) -> tuple[int, int]:
     shapes), computed without visiting them: what a limit check decides from."""
     candidates = tests = 0
     for body in scene.bodies:
+        given = _given_points(body)
+        if given is not None:
+            candidates += len(given.volumes)
+            continue
         count = math.prod((stop - first) * body.particles_per_cell for first, stop in candidate_cells(scene, body))
         candidates += count
         tests += count * _primitives(body.geometry)

@@ -709,6 +709,12 @@
     editor.value = sessionStorage.getItem("mpm.draft") || "";
     const examples = h("select", { "aria-label": "example", onchange: pickExample }, h("option", { value: "" }, "Start from an example…"));
     const file = h("input", { type: "file", accept: ".json,application/json", hidden: true, onchange: pickFile });
+    // Mesh files beside the scene: the service never opens a path named in a scene, so a mesh
+    // geometry's "file" is sent as the attached file's bytes ("data", base64) and its "format".
+    const meshes = new Map();
+    const meshFile = h("input", { type: "file", accept: ".stl,.obj", multiple: true, hidden: true,
+                                  "aria-label": "mesh file", onchange: pickMeshes });
+    const attached = h("div", { class: "attached" });
     const processes = h("input", { type: "number", min: 1, step: 1, placeholder: "1", class: "processes", "aria-label": "processes" });
     const validate = h("button", { class: "button", onclick: () => check(false) }, "Validate");
     const submit = h("button", { class: "button primary", onclick: () => check(true) }, "Submit");
@@ -718,8 +724,9 @@
     container.replaceChildren(h("div", { class: "columns new-job" },
       h("section", { class: "card" },
         h("div", { class: "toolbar" }, h("h1", {}, "New job"),
-          h("div", { class: "row" }, examples, h("button", { class: "button ghost", onclick: () => file.click() }, "Open file…"), file)),
-        editor,
+          h("div", { class: "row" }, examples, h("button", { class: "button ghost", onclick: () => file.click() }, "Open file…"), file,
+            h("button", { class: "button ghost", onclick: () => meshFile.click() }, "Mesh file…"), meshFile)),
+        editor, attached,
         h("div", { class: "row end" }, h("label", { class: "inline" }, "Processes", processes), validate, submit)),
       h("section", { class: "card" }, h("h2", {}, "Validation"), outcome)));
 
@@ -739,6 +746,32 @@
       file.value = "";
     }
 
+    async function pickMeshes() {
+      for (const picked of meshFile.files) {
+        const bytes = new Uint8Array(await picked.arrayBuffer());
+        let binary = "";
+        for (let i = 0; i < bytes.length; i += 0x8000) binary += String.fromCharCode(...bytes.subarray(i, i + 0x8000));
+        meshes.set(picked.name, { data: btoa(binary), format: picked.name.split(".").pop().toLowerCase() });
+      }
+      meshFile.value = "";
+      attached.replaceChildren(...[...meshes.keys()].map((name) => h("span", { class: "chip" }, `Mesh: ${name}`)));
+    }
+
+    /** The scene with each mesh "file" replaced by its attached file's data; the names not attached. */
+    function inlineMeshes(node, missing) {
+      if (Array.isArray(node)) return node.map((item) => inlineMeshes(item, missing));
+      if (!node || typeof node !== "object") return node;
+      const out = Object.fromEntries(Object.entries(node).map(([k, v]) => [k, inlineMeshes(v, missing)]));
+      if (out.type === "mesh" && typeof out.file === "string") {
+        const mesh = meshes.get(out.file.split(/[\\/]/).pop());
+        if (!mesh) { missing.push(out.file); return out; }
+        delete out.file;
+        out.data = mesh.data;
+        out.format = out.format || mesh.format;
+      }
+      return out;
+    }
+
     function setText(text) {
       editor.value = text;
       sessionStorage.setItem("mpm.draft", text);
@@ -754,16 +787,23 @@
           h("ul", { class: "errors" }, h("li", {}, parseErrorText(editor.value, error))));
         return;
       }
+      const missing = [];
+      const sent = inlineMeshes(scene, missing);
+      if (missing.length) {
+        outcome.replaceChildren(h("div", { class: "errors-head" }, "Attach the mesh files the scene names (Mesh file…)"),
+          h("ul", { class: "errors" }, missing.map((name) => h("li", {}, h("code", {}, name), " is not attached"))));
+        return;
+      }
       validate.disabled = submit.disabled = true;
       try {
         if (andSubmit) {
-          const body = { scene };
+          const body = { scene: sent };
           if (processes.value) body.processes = Number(processes.value);
           const job = await api("v1/jobs", { method: "POST", body });
           sessionStorage.removeItem("mpm.draft");
           location.hash = `#/jobs/${job.id}`;
         } else {
-          showSummary((await api("v1/scenes/validate", { method: "POST", body: scene })).summary);
+          showSummary((await api("v1/scenes/validate", { method: "POST", body: sent })).summary);
         }
       } catch (error) {
         if (error instanceof ApiError && error.status === 422 && Array.isArray(error.details)) showErrors(scene, error);

@@ -1,7 +1,7 @@
 """The dashboard in headless Chromium against a live service: submit through the
 form and watch the job succeed, its preview and energy plot, cancel a long job,
 validation errors next to their fields, the status filter, download and delete,
-the lost-connection banner and the polling back-off."""
+the lost-connection banner and the polling back-off, a mesh file attached beside the scene."""
 from __future__ import annotations
 
 import json
@@ -253,3 +253,34 @@ def test_the_job_page_shows_the_solver_log(page: Page, sdk, example):
     log = page.get_by_label("solver log")
     expect(log).to_contain_text("ended early")
     assert log.text_content() == text  # every line once
+
+
+def test_a_mesh_file_beside_the_scene_is_sent_as_data(page: Page, sdk, tmp_path):
+    """A scene naming a mesh file: the form asks for the file, then sends its bytes inlined
+    (the service refuses a path), and the job runs the part."""
+    corner = [(i, j, k) for k in (0, 1) for j in (0, 1) for i in (0, 1)]   # the unit cube's 8 corners
+    faces = [(0, 2, 3), (0, 3, 1), (4, 5, 7), (4, 7, 6), (0, 1, 5), (0, 5, 4),
+             (1, 3, 7), (1, 7, 5), (3, 2, 6), (3, 6, 7), (2, 0, 4), (2, 4, 6)]
+    facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join("vertex %d %d %d\n" % corner[v] for v in face)
+                     + "endloop\nendfacet\n" for face in faces)
+    (tmp_path / "cube.stl").write_text(f"solid cube\n{facets}endsolid cube\n")
+    scene = {"name": "Mesh cube (dashboard)", "dimension": 3,
+             "grid": {"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.25},
+             "materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1e6,
+                                 "poisson_ratio": 0.3}},
+             "bodies": [{"name": "cube", "material": "m", "initial_velocity": [0.1, 0, 0],
+                         "geometry": {"type": "mesh", "file": "cube.stl", "scale": 0.5, "translate": [0.25, 0.25, 0.25]}}],
+             "time": {"end": 0.01}, "output": {"frames": 2}}
+    fill_scene(page, scene)
+    page.get_by_role("button", name="Validate").click()
+    expect(page.locator(".outcome")).to_contain_text("cube.stl is not attached")
+
+    page.get_by_label("mesh file").set_input_files(str(tmp_path / "cube.stl"))
+    expect(page.locator(".attached")).to_contain_text("Mesh: cube.stl")
+    page.get_by_role("button", name="Validate").click()
+    expect(page.locator(".outcome")).to_contain_text("The scene is valid")
+    expect(page.locator(".outcome")).to_contain_text("64")   # a 0.5 m cube, 0.25 m cells, 2 x 2 x 2 per cell
+    page.get_by_role("button", name="Submit").click()
+    expect(page).to_have_url(re.compile(r"#/jobs/"))
+    job = sdk.job(page.url.rsplit("/", 1)[-1]).wait(timeout=120, progress=False)
+    assert job.record.status == "succeeded"

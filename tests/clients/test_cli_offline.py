@@ -1,6 +1,7 @@
 """The client commands of ``mpm`` against the scripted fake API, and the loading of other packages' commands."""
 from __future__ import annotations
 
+import base64
 import json
 
 import httpx
@@ -127,3 +128,28 @@ def test_other_packages_commands_are_added_and_broken_ones_only_warned(monkeypat
     assert cli.main(["run"]) == 7
     err = capsys.readouterr().err
     assert "warning: command 'serve'" in err and "No module named 'fastapi'" in err
+
+
+def test_submit_inlines_a_mesh_file_beside_the_scene(fake, servers, tmp_path):
+    """The service never opens a path named in a scene: `mpm submit` sends the mesh's bytes."""
+    (tmp_path / "parts").mkdir()
+    stl = b"solid part\nendsolid part\n" * 3
+    (tmp_path / "parts" / "bracket.STL").write_bytes(stl)
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps({"bodies": [{"geometry": {"type": "union", "parts": [
+        {"type": "mesh", "file": "parts/bracket.STL", "scale": 0.001}, {"type": "box"}]}}]}))
+    fake.on("POST", "/v1/jobs", httpx.Response(202, json=job_record()))
+    assert cli.main(["submit", str(scene)]) == 0
+    sent = sent_json(fake.requests[-1])["scene"]["bodies"][0]["geometry"]["parts"]
+    assert sent == [{"type": "mesh", "scale": 0.001, "format": "stl", "data": base64.b64encode(stl).decode()},
+                    {"type": "box"}]
+
+
+def test_submit_inlines_a_points_file_as_positions_and_volumes(fake, servers, tmp_path):
+    (tmp_path / "cloud.csv").write_text("x,y,volume\n0.1,0.2,0.001\n0.3,0.4,0.002\n")
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps({"bodies": [{"geometry": {"type": "points", "file": "cloud.csv"}}]}))
+    fake.on("POST", "/v1/jobs", httpx.Response(202, json=job_record()))
+    assert cli.main(["submit", str(scene)]) == 0
+    assert sent_json(fake.requests[-1])["scene"]["bodies"][0]["geometry"] == {
+        "type": "points", "positions": [[0.1, 0.2], [0.3, 0.4]], "volumes": [0.001, 0.002]}

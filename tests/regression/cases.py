@@ -12,6 +12,8 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from solver.mesh import inline_files
+
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 STEPS = 20
 HEAVY = {"hypervelocity_lead": 8, "taylor_bar_3d": 10, "taylor_bar_3d_tlmpm": 10}   # 19k-37k particles in 3D
@@ -27,7 +29,8 @@ class Case:
 
 
 def _example(name: str) -> dict:
-    return json.loads((EXAMPLES / f"{name}.json").read_text())
+    """The example's document, mesh files inlined (a case runs from the document alone)."""
+    return inline_files(json.loads((EXAMPLES / f"{name}.json").read_text()), EXAMPLES)
 
 
 def _with(scene: dict, threads: int, **method) -> dict:

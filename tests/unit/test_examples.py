@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from solver.examples import DEFAULT_DIR, ExampleNotFound, list_examples, load_example
+from solver.mesh import inline_files
 from solver.scene import load_scene
 from solver.summary import summarize
 
@@ -85,7 +86,7 @@ def test_bar_is_review_case_6_1_1_mode_1():
 def test_every_example_runs_its_first_steps(path, tmp_path):
     from solver import run
 
-    scene = json.loads(path.read_text())
+    scene = inline_files(json.loads(path.read_text()), path.parent)   # a run of a document reads no file
     dt = summarize(load_scene(scene)).dt
     scene["time"]["end"] = 20 * dt
     scene["output"]["frames"] = 2
