@@ -19,7 +19,7 @@ from core.store import CursorError, JobStore, job_key
 from service import quotas, results
 from service.auth import caller, owns
 from service.errors import ApiError, documented, owned_resource, validation_error
-from service.scenes import check_scene, granted_processes
+from service.scenes import WrapsScene, check_scene, granted_processes
 from service.settings import ApiSettings
 from service.state import Services, services
 
@@ -28,7 +28,7 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"],
                    responses=owned_resource("job"))
 
 
-class JobRequest(BaseModel):
+class JobRequest(WrapsScene):
     model_config = ConfigDict(extra="forbid")
     scene: dict[str, Any] = Field(description="the scene document (see GET /v1/schema/scene)")
     processes: int | None = Field(None, ge=1, description="processes to run it on; capped by the service")
