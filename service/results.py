@@ -1,6 +1,7 @@
-"""Reading a job's result for the API: preview images (cached per frame and field)
-and the time series as JSON. A running job's file is read as it is being written
-(the solver flushes complete frames); nothing of it is cached."""
+"""Reading a job's result for the API: preview images (cached per frame and field),
+animations (cached per field and format), the frames and their particles for the
+dashboard's viewer, and the time series as JSON. A running job's file is read as it
+is being written (the solver flushes complete frames); nothing of it is cached."""
 from __future__ import annotations
 
 import json

@@ -466,6 +466,7 @@
 
   const RESULT_MODES = [["viewer", "Viewer"], ["image", "Image"], ["animation", "Animation"]];
   const PLAY_INTERVAL = 180;  // ms between frames while playing (plus the time to fetch each)
+  const PARTICLE_CACHE = 64;  // frames of a finished job kept in the page
 
   /** One frame's particles (GET .../frames/N/particles): {header, xyz, values}; see docs/service.md. */
   async function fetchParticles(id, frame, field) {
@@ -581,7 +582,11 @@
       const key = `${index}:${field()}`;
       const finished = !ACTIVE.has(state.record.status);
       const data = (finished && state.particles.get(key)) || await fetchParticles(id, index, field());
-      if (finished) state.particles.set(key, data);
+      if (finished) {
+        state.particles.set(key, data);
+        // keep the latest frames only (about 12 MB a frame of a million particles)
+        while (state.particles.size > PARTICLE_CACHE) state.particles.delete(state.particles.keys().next().value);
+      }
       if (!state.viewer) {
         state.viewer = window.MpmViewer.create(stage, viewerOptions(state.scene, state.listing, data));
         stage.dataset.ready = "true";
