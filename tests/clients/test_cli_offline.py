@@ -127,3 +127,12 @@ def test_other_packages_commands_are_added_and_broken_ones_only_warned(monkeypat
     assert cli.main(["run"]) == 7
     err = capsys.readouterr().err
     assert "warning: command 'serve'" in err and "No module named 'fastapi'" in err
+
+
+@pytest.mark.parametrize("command", [["submit"], ["sweep", "-p", "/time/dt=1,2"]], ids=["submit", "sweep"])
+def test_a_scene_file_with_a_json_syntax_error_names_its_line_and_column(fake, servers, tmp_path, capsys, command):
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"version": 1,\n  "name": }')  # the value is missing at line 2, column 11
+    assert cli.main([command[0], str(broken), *command[1:]]) == 1
+    assert f"{broken} is not valid JSON: line 2, column 11: Expecting value" in capsys.readouterr().err
+    assert not fake.calls("POST", "/v1/jobs") and not fake.calls("POST", "/v1/sweeps")  # nothing was sent
