@@ -487,9 +487,13 @@
     if (grid.lower && grid.upper) {
       grid.lower.forEach((v, a) => { lower[a] = v; upper[a] = grid.upper[a]; });
     } else {
-      for (let a = 0; a < dimension; a += 1) {
-        const axis = Array.from({ length: first.header.count }, (_, i) => first.xyz[3 * i + a]).filter(Number.isFinite);
-        lower[a] = Math.min(...axis); upper[a] = Math.max(...axis);
+      lower = [Infinity, Infinity, Infinity].map((v, a) => (a < dimension ? v : 0));
+      upper = [-Infinity, -Infinity, -Infinity].map((v, a) => (a < dimension ? v : 0));
+      for (let i = 0; i < first.header.count; i += 1) {  // a loop: spreading 10^5 values overflows the stack
+        for (let a = 0; a < dimension; a += 1) {
+          const x = first.xyz[3 * i + a];
+          if (Number.isFinite(x)) { lower[a] = Math.min(lower[a], x); upper[a] = Math.max(upper[a], x); }
+        }
       }
     }
     if (dimension === 1) upper[1] = lower[1] + 0.5 * (upper[0] - lower[0]);  // the profile's height

@@ -318,10 +318,6 @@ window.MpmViewer = (() => {
 
     return {
       show,
-      redraw,
-      camera,
-      /** Turn a 3D view by `radians` about the vertical axis (tests and the keyboard). */
-      orbit(radians) { camera.yaw += radians; redraw(); },
       destroy() { resize.disconnect(); gl.getExtension("WEBGL_lose_context")?.loseContext(); },
     };
   }

@@ -137,6 +137,22 @@ def test_axisymmetric_results_are_drawn_in_r_and_z(page: Page, sdk):
     expect(page.locator(".colour-bar .colour-label")).to_have_text("velocity_magnitude [mm/ms]")
 
 
+def test_a_scene_without_a_grid_box_is_framed_by_its_particles(page: Page, sdk):
+    """TLMPM may leave the grid's box out: the viewer frames the particles' box instead."""
+    scene = {
+        "name": "TLMPM without a grid box (viewer)", "dimension": 2, "method": {"formulation": "tlmpm"},
+        "grid": {"cell_size": 0.1},
+        "materials": {"m": {"model": "neo_hookean", "density": 1000, "youngs_modulus": 1e5, "poisson_ratio": 0.3}},
+        "bodies": [{"name": "block", "material": "m", "geometry": {"type": "box", "lower": [0, 0], "upper": [1, 0.5]},
+                    "initial_velocity": ["0.1 * y", 0]}],
+        "time": {"end": 0.02, "dt": 0.001}, "output": {"frames": 2},
+    }
+    job = sdk.submit(scene).wait(timeout=120, poll=0.2, progress=False)
+    open_results(page, job.id, WIDE)
+    # the block fills the frame's width (the particles' box): squares over a good part of the canvas
+    assert coloured_share(page) > 0.2
+
+
 def test_a_1d_result_is_drawn_as_its_profile(page: Page, sdk):
     scene = sdk.example("bar_vibration")
     scene["name"] = "Bar (viewer)"
