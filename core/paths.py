@@ -53,3 +53,7 @@ class JobFiles:
     def preview(self, frame: int, field: str) -> Path:
         """A cached rendering; `field` must already be checked against the known names."""
         return self.previews / f"frame{frame}_{field}.png"
+
+    def animation(self, field: str, suffix: str) -> Path:
+        """A cached animation (suffix ".gif" or ".mp4"); `field` already checked."""
+        return self.previews / f"animation_{field}{suffix}"

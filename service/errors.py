@@ -77,11 +77,24 @@ def _request_validation(request: Request, exc: RequestValidationError) -> JSONRe
         if loc and loc[0] in ("body", "query", "path"):
             loc = loc[1:]
         if error.get("type") == "json_invalid":
-            loc, message = [], f"not valid JSON: {error.get('ctx', {}).get('error', error['msg'])}"
+            details.append(_json_syntax(error, loc, exc.body))
         else:
-            message = error["msg"]
-        details.append({"path": format_path(loc), "message": message})
+            details.append({"path": format_path(loc), "message": error["msg"]})
     return error_response(422, "validation_failed", "the request is not valid", details)
+
+
+def _json_syntax(error: dict[str, Any], loc: list[Any], document: Any) -> dict[str, Any]:
+    """A JSON syntax error, with its line and column (1-based, as json.JSONDecodeError counts
+    them) when the parser gave the offset (FastAPI puts it in `loc`, the text in `body`)."""
+    reason = error.get("ctx", {}).get("error", error["msg"])
+    if not (loc and isinstance(loc[0], int) and isinstance(document, (str, bytes))):
+        return {"path": "", "message": f"not valid JSON: {reason}"}
+    text = document.decode("utf-8", "replace") if isinstance(document, bytes) else document
+    offset = loc[0]
+    line = text.count("\n", 0, offset) + 1
+    column = offset - text.rfind("\n", 0, offset)
+    return {"path": "", "line": line, "column": column,
+            "message": f"not valid JSON: line {line}, column {column}: {reason}"}
 
 
 def _api_error(request: Request, exc: ApiError) -> JSONResponse:

@@ -5,7 +5,7 @@ import json
 import logging
 import shutil
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 from fastapi import APIRouter, Depends, Query, Response
 from fastapi.responses import FileResponse, JSONResponse
@@ -19,16 +19,17 @@ from core.store import CursorError, JobStore, job_key
 from service import quotas, results
 from service.auth import caller, owns
 from service.errors import ApiError, documented, owned_resource, validation_error
-from service.scenes import check_scene, granted_processes
+from service.scenes import WrapsScene, check_scene, granted_processes
 from service.settings import ApiSettings
 from service.state import Services, services
 
 log = logging.getLogger("mpm.api")
+FIELD_NAME = r"^[A-Za-z_][A-Za-z0-9_]{0,63}$"  # an output field's name (it becomes part of a cache file's name)
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"],
                    responses=owned_resource("job"))
 
 
-class JobRequest(BaseModel):
+class JobRequest(WrapsScene):
     model_config = ConfigDict(extra="forbid")
     scene: dict[str, Any] = Field(description="the scene document (see GET /v1/schema/scene)")
     processes: int | None = Field(None, ge=1, description="processes to run it on; capped by the service")
@@ -51,7 +52,8 @@ def public(record: dict[str, Any]) -> dict[str, Any]:
     job = dict(record)
     base = f"/v1/jobs/{record['id']}"
     job["links"] = {"self": base, "result": f"{base}/result.h5", "preview": f"{base}/preview.png",
-                    "series": f"{base}/series", "cancel": f"{base}/cancel", "scene": f"{base}/scene"}
+                    "series": f"{base}/series", "cancel": f"{base}/cancel", "scene": f"{base}/scene",
+                    "frames": f"{base}/frames", "animation": f"{base}/animation.gif"}
     return job
 
 
@@ -247,7 +249,7 @@ def get_result(job_id: str, svc: Services = Depends(services),
 @router.get("/{job_id}/preview.png", response_class=Response,
             responses={200: {"content": {"image/png": {}}}, **documented({409: "no result yet"})})
 def get_preview(job_id: str, frame: int = -1,
-                field: str | None = Query(None, pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,63}$"),
+                field: str | None = Query(None, pattern=FIELD_NAME),
                 svc: Services = Depends(services), owner: str | None = Depends(caller)) -> Response:
     """Frame `frame` (negative: from the end) coloured by `field` (default: the scene's
     preview field). Finished jobs' images are cached; a running job's are drawn each time."""
@@ -256,6 +258,40 @@ def get_preview(job_id: str, frame: int = -1,
     if isinstance(png, bytes):
         return Response(png, media_type="image/png", headers={"Cache-Control": "no-store"})
     return FileResponse(png, media_type="image/png")
+
+
+@router.get("/{job_id}/frames", responses=documented({409: "no result yet"}))
+def get_frames(job_id: str, svc: Services = Depends(services),
+               owner: str | None = Depends(caller)) -> dict[str, Any]:
+    """The frames written so far (index, time, step, particles), the fields they can be
+    coloured by, the axes (r and z for axisymmetric scenes) and the scene's units."""
+    files, _ = _result_files(svc, job_id, owner, running_too=True)
+    return results.frames(files)
+
+
+@router.get("/{job_id}/frames/{frame}/particles", response_class=Response,
+            responses={200: {"content": {"application/octet-stream": {}},
+                             "description": "uint32 header length, JSON header, float32 xyz, float32 values"},
+                       **documented({409: "no result yet"})})
+def get_particles(job_id: str, frame: int, field: str | None = Query(None, pattern=FIELD_NAME),
+                  svc: Services = Depends(services), owner: str | None = Depends(caller)) -> Response:
+    """One frame's particle positions and one value each (`field`; default: the scene's
+    preview field), packed for the dashboard's 3D viewer (docs/service.md)."""
+    files, finished = _result_files(svc, job_id, owner, running_too=True)
+    return Response(results.particles(files, frame, field), media_type="application/octet-stream",
+                    headers={"Cache-Control": "private, max-age=3600" if finished else "no-store"})
+
+
+@router.get("/{job_id}/animation.{kind}", response_class=FileResponse,
+            responses={200: {"content": {"image/gif": {}, "video/mp4": {}}},
+                       **documented({409: "no animation until the job has finished"})})
+def get_animation(job_id: str, kind: Literal["gif", "mp4"], field: str | None = Query(None, pattern=FIELD_NAME),
+                  svc: Services = Depends(services), owner: str | None = Depends(caller)) -> FileResponse:
+    """Every frame drawn like the previews, one colour scale for the run, as a GIF or an
+    MP4 (H.264); rendered on the first request (seconds to a minute), then cached."""
+    files, _ = _result_files(svc, job_id, owner)
+    path = results.animation(files, field, f".{kind}")
+    return FileResponse(path, media_type="image/gif" if kind == "gif" else "video/mp4")
 
 
 @router.get("/{job_id}/series")

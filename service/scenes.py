@@ -6,6 +6,8 @@ from functools import lru_cache
 from typing import Any
 
 from fastapi import APIRouter, Body, Depends
+from pydantic import BaseModel, model_validator
+from pydantic_core import PydanticCustomError
 
 from solver import capabilities
 from solver.examples import ExampleNotFound, list_examples, load_example
@@ -48,6 +50,26 @@ def check_scene(document: dict[str, Any], settings: ApiSettings) -> tuple[str, d
     return scene.model_dump_json(), summary
 
 
+class WrapsScene(BaseModel):
+    """A request body that carries a scene under `scene` (a job, a sweep). A bare scene posted
+    in its place is answered with one error that says how to wrap it, rather than a list of
+    "Extra inputs are not permitted" for each of its keys (the contract keeps the wrapper:
+    a mistyped `scene` key must not be read as a scene)."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _not_a_bare_scene(cls, body: Any) -> Any:
+        if isinstance(body, dict) and "scene" not in body:
+            scene_keys = (set(Scene.model_fields) - set(cls.model_fields)) & set(body)
+            if scene_keys:
+                raise PydanticCustomError(
+                    "bare_scene", "this body is a bare scene (it has {keys}); send the scene wrapped, "
+                    "{wrapped}, with the request's other keys ({others}) beside it",
+                    {"keys": ", ".join(sorted(scene_keys)), "wrapped": '{"scene": <the scene>}',
+                     "others": ", ".join(key for key in cls.model_fields if key != "scene")})
+        return body
+
+
 def granted_processes(requested: int | None, scene: dict[str, Any], settings: ApiSettings) -> int:
     """The processes a job runs on: what it asks (the request, else the scene), capped by
     MPM_MAX_PROCESSES and by what the solver supports."""
@@ -61,6 +83,10 @@ def granted_processes(requested: int | None, scene: dict[str, Any], settings: Ap
 def validate_scene(scene: dict[str, Any] = Body(..., description="a scene document"),
                    svc: Services = Depends(services)) -> dict[str, Any]:
     """Validate a scene; answer what it implies (particles, nodes, steps, memory, run time)."""
+    if isinstance(scene.get("scene"), dict) and not set(scene) & set(Scene.model_fields):
+        raise validation_error([{"path": "scene", "message": "this body is a job request; /v1/scenes/validate "
+                                 "takes the scene itself, not wrapped in {\"scene\": ...}"}],
+                               "the scene is not valid")
     _, summary = check_scene(scene, svc.settings)
     return {"summary": summary}
 

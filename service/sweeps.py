@@ -8,13 +8,14 @@ import uuid
 from typing import Any
 
 from fastapi import APIRouter, Depends, Query, Response
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
 
 from core import sweeps
 from core.models import ACTIVE, FINISHED, SweepMode, SweepRecord, now_iso
 from service.auth import caller, owns
 from service.errors import ApiError, documented, owned_resource, validation_error
 from service.jobs import NewJob, checked_callback, new_job_from, remove_files, store_and_enqueue
+from service.scenes import WrapsScene
 from service.state import Services, services
 
 log = logging.getLogger("mpm.api")
@@ -22,7 +23,7 @@ router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"],
                    responses=owned_resource("sweep"))
 
 
-class SweepRequest(BaseModel):
+class SweepRequest(WrapsScene):
     model_config = ConfigDict(extra="forbid")
     scene: dict[str, Any] = Field(description="the base scene")
     parameters: dict[str, list[Any]] = Field(

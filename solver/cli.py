@@ -288,6 +288,37 @@ def cmd_preview(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# -- mpm animate -------------------------------------------------------------
+
+
+def register_animate(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "animate", help="write every frame of a result file as a GIF or MP4 animation",
+        description="Draw every frame of result.h5 as the previews are, with one colour scale for the "
+                    "whole run, and encode them as a GIF or an MP4 (H.264), chosen by the file's suffix.",
+    )
+    parser.add_argument("result", help="result file (result.h5)")
+    parser.add_argument("-o", "--output", metavar="FILE",
+                        help="run.gif or run.mp4 (default: animation.gif beside the result)")
+    parser.add_argument("--field", help="field to colour by (default: the scene's preview field)")
+    parser.add_argument("--fps", type=float, default=None, help="frames per second (default 10)")
+    parser.set_defaults(func=cmd_animate)
+
+
+def cmd_animate(args: argparse.Namespace) -> int:
+    from solver.animation import DEFAULT_FPS, render_animation
+
+    result = Path(args.result)
+    out = Path(args.output) if args.output else result.parent / "animation.gif"
+    try:
+        render_animation(result, out, field=args.field, fps=args.fps or DEFAULT_FPS)
+    except (OSError, ValueError, IndexError) as error:
+        print(f"mpm animate: error: {error}", file=sys.stderr)
+        return EXIT_ERROR
+    print(out)
+    return EXIT_OK
+
+
 # -- mpm examples ------------------------------------------------------------
 
 
@@ -367,6 +398,7 @@ BUILTINS = {
     "run": register_run,
     "validate": register_validate,
     "preview": register_preview,
+    "animate": register_animate,
     "examples": register_examples,
     "import": register_import,
 }

@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 
 from solver.errors import SolverError
 from solver.results import RESULT_FILE, list_frames, read_frame, read_scene
+from solver.units import unit_of_field, with_unit
 
 PREVIEW_FILE = "preview.png"
 DEFAULT_FIELD = "velocity_magnitude"
@@ -90,6 +91,54 @@ def default_field(fields: dict[str, np.ndarray], scene: dict[str, Any]) -> str:
     return "body"  # always written: a frame without velocity is still drawn
 
 
+def axis_labels(scene: dict[str, Any]) -> list[str]:
+    """The names of the scene's axes with their unit: r and z for an axisymmetric scene."""
+    names = ["r", "z"] if scene.get("axisymmetric") else ["x", "y", "z"][: int(scene["dimension"])]
+    return [with_unit(name, unit_of_field(scene.get("units"), "length")) for name in names]
+
+
+def frame_values(scene: dict[str, Any], snapshot: dict[str, Any], field: str | None) -> tuple[np.ndarray, np.ndarray, str]:
+    """Positions (n, dimension), one value per particle and the colour label (with its unit)
+    of a frame read by solver.results.read_frame."""
+    fields = snapshot["fields"]
+    name = field or default_field(fields, scene)
+    values, label = scalar_values(fields, name)
+    dimension = int(scene["dimension"])
+    position = np.asarray(fields["position"], dtype=float).reshape(len(values), dimension)
+    return position, values, with_unit(label, unit_of_field(scene.get("units"), name))
+
+
+def new_figure(dimension: int) -> Figure:
+    figure = Figure(figsize=(7.0, 6.0) if dimension > 1 else (8.0, 4.5), dpi=DPI)
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def draw_frame(figure: Figure, scene: dict[str, Any], snapshot: dict[str, Any], field: str | None,
+               value_range: tuple[float, float] | None = None) -> None:
+    """Draw a frame into an empty figure; `value_range`: the colour scale (default: the frame's
+    own), fixed by an animation so that colours mean the same in every frame."""
+    position, values, label = frame_values(scene, snapshot, field)
+    low, high = value_range or colour_range(values)
+    dimension = int(scene["dimension"])
+    axes = axis_labels(scene)
+    lower, upper = _extent(scene, position)
+    spacing = _particle_spacing(scene, snapshot["fields"]["body"], lower, upper, len(values))
+    if dimension == 1:
+        _plot_1d(figure, position[:, 0], values, label, lower, upper, axes, (low, high))
+    elif dimension == 2:
+        _plot_2d(figure, position, values, label, lower, upper, spacing, axes, (low, high))
+    else:
+        _plot_3d(figure, position, values, label, lower, upper, spacing, axes, (low, high))
+    time_unit = unit_of_field(scene.get("units"), "time")
+    figure.suptitle(
+        f"{scene.get('name') or 'scene'}\n"
+        f"t = {snapshot['time']:.6g}{' ' + time_unit if time_unit else ''}   step {snapshot['step']}   "
+        f"frame {snapshot['index']}",
+        fontsize=11,
+    )
+
+
 def render_preview(
     result_path: str | os.PathLike,
     frame: int = -1,
@@ -103,27 +152,8 @@ def render_preview(
     ``IndexError``) for a frame out of range.
     """
     scene = read_scene(result_path)
-    snapshot = read_frame(result_path, frame)
-    fields = snapshot["fields"]
-    values, label = scalar_values(fields, field or default_field(fields, scene))
-    dimension = int(scene["dimension"])
-    position = np.asarray(fields["position"], dtype=float).reshape(len(values), dimension)
-
-    figure = Figure(figsize=(7.0, 6.0) if dimension > 1 else (8.0, 4.5), dpi=DPI)
-    FigureCanvasAgg(figure)
-    lower, upper = _extent(scene, position)
-    spacing = _particle_spacing(scene, fields["body"], lower, upper, len(values))
-    if dimension == 1:
-        _plot_1d(figure, position[:, 0], values, label, lower, upper)
-    elif dimension == 2:
-        _plot_2d(figure, position, values, label, lower, upper, spacing)
-    else:
-        _plot_3d(figure, position, values, label, lower, upper, spacing)
-    figure.suptitle(
-        f"{scene.get('name') or 'scene'}\n"
-        f"t = {snapshot['time']:.6g}   step {snapshot['step']}   frame {snapshot['index']}",
-        fontsize=11,
-    )
+    figure = new_figure(int(scene["dimension"]))
+    draw_frame(figure, scene, read_frame(result_path, frame), field)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=DPI)
     png = buffer.getvalue()
@@ -183,7 +213,7 @@ def _particle_spacing(
     return per_body[np.clip(np.asarray(body, dtype=int), 0, len(per_body) - 1)]
 
 
-def _colour_range(values: np.ndarray) -> tuple[float, float]:
+def colour_range(values: np.ndarray) -> tuple[float, float]:
     finite = values[np.isfinite(values)]
     if len(finite) == 0:
         return 0.0, 1.0
@@ -199,23 +229,25 @@ def _colour_bar(figure: Figure, mappable, axes, label: str, low: float, high: fl
     bar.set_label(f"{label}\nrange [{low:.4g}, {high:.4g}]")
 
 
-def _plot_1d(figure: Figure, x: np.ndarray, values: np.ndarray, label: str, lower, upper) -> None:
+def _plot_1d(figure: Figure, x: np.ndarray, values: np.ndarray, label: str, lower, upper,
+             names: list[str], value_range: tuple[float, float]) -> None:
     axes = figure.add_subplot()
     order = np.argsort(x)
     axes.plot(x[order], values[order], "-", color="0.6", linewidth=1.0, zorder=1)
     axes.scatter(x[order], values[order], s=18, color="tab:blue", zorder=2)
     axes.set_xlim(lower[0], upper[0])
-    low, high = _colour_range(values)
+    low, high = value_range
     axes.set_ylim(low - 0.08 * (high - low), high + 0.08 * (high - low))
-    axes.set_xlabel("x")
+    axes.set_xlabel(names[0])
     axes.set_ylabel(f"{label}\nrange [{low:.4g}, {high:.4g}]")
     axes.grid(True, alpha=0.3)
     figure.subplots_adjust(top=0.84, left=0.14)
 
 
-def _plot_2d(figure: Figure, position, values, label: str, lower, upper, spacing) -> None:
+def _plot_2d(figure: Figure, position, values, label: str, lower, upper, spacing,
+             names: list[str], value_range: tuple[float, float]) -> None:
     axes = figure.add_subplot()
-    low, high = _colour_range(values)
+    low, high = value_range
     points = axes.scatter(
         position[:, 0], position[:, 1], c=values, vmin=low, vmax=high,
         cmap="viridis", marker="s", linewidths=0,
@@ -223,8 +255,8 @@ def _plot_2d(figure: Figure, position, values, label: str, lower, upper, spacing
     axes.set_xlim(lower[0], upper[0])
     axes.set_ylim(lower[1], upper[1])
     axes.set_aspect("equal")
-    axes.set_xlabel("x")
-    axes.set_ylabel("y")
+    axes.set_xlabel(names[0])
+    axes.set_ylabel(names[1])
     axes.set_facecolor("0.96")
     _colour_bar(figure, points, axes, label, low, high)
     figure.subplots_adjust(top=0.86)
@@ -234,9 +266,10 @@ def _plot_2d(figure: Figure, position, values, label: str, lower, upper, spacing
     points.set_sizes((MARKER_OVERLAP * spacing * points_per_unit) ** 2)
 
 
-def _plot_3d(figure: Figure, position, values, label: str, lower, upper, spacing) -> None:
+def _plot_3d(figure: Figure, position, values, label: str, lower, upper, spacing,
+             names: list[str], value_range: tuple[float, float]) -> None:
     axes = figure.add_subplot(projection="3d")
-    low, high = _colour_range(values)
+    low, high = value_range
     # Matplotlib draws its z axis upwards; the scene's y is the vertical one.
     points = axes.scatter(
         position[:, 0], position[:, 2], position[:, 1], c=values, vmin=low, vmax=high,
@@ -246,9 +279,9 @@ def _plot_3d(figure: Figure, position, values, label: str, lower, upper, spacing
     axes.set_ylim(lower[2], upper[2])
     axes.set_zlim(lower[1], upper[1])
     axes.set_box_aspect((upper[0] - lower[0], upper[2] - lower[2], upper[1] - lower[1]))
-    axes.set_xlabel("x")
-    axes.set_ylabel("z")
-    axes.set_zlabel("y")
+    axes.set_xlabel(names[0])
+    axes.set_ylabel(names[2])
+    axes.set_zlabel(names[1])
     axes.view_init(elev=22, azim=-60)
     _colour_bar(figure, points, axes, label, low, high)
     figure.subplots_adjust(top=0.88)

@@ -48,6 +48,7 @@ from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
 from solver.materials.rigid import Rigid
 from solver.parallel.slabs import scene_problems as slab_problems
+from solver.units import Units
 from solver.schema import (
     Boolean,
     NonNegative,
@@ -609,6 +610,7 @@ class Scene(SceneModel):
     time: Time
     output: Output = Field(default_factory=Output)
     parallel: Parallel = Field(default_factory=Parallel)
+    units: Units | None = None  # labels only (solver/units.py): plots show them, nothing is converted
 
     @field_validator("axisymmetric")
     @classmethod

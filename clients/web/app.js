@@ -450,7 +450,7 @@
     const open = () => { location.hash = `#/jobs/${job.id}`; };
     const end = job.end_time ? ` / ${fmtNumber(job.end_time)}` : "";
     return h("tr", { class: "job-row", dataset: { id: job.id, status: job.status }, onclick: open },
-      h("td", { class: "name" }, h("a", { href: `#/jobs/${job.id}` }, job.name || "(unnamed)"),
+      h("td", { class: "name" }, h("a", { href: `#/jobs/${job.id}`, title: job.name || "" }, job.name || "(unnamed)"),
         h("div", { class: "id" }, job.id.slice(0, 8))),
       h("td", {}, badge(job.status)),
       h("td", { class: "progress-cell" }, progressBar(job)),
@@ -462,30 +462,260 @@
 
   // ---------------------------------------------------------------- view: one job
 
-  /** Frames and fields a preview can show, from the validated scene (see solver/preview.py). */
-  function previewChoices(scene, record) {
-    const output = (scene && scene.output) || {};
-    const stored = new Set([...(output.fields || ["position", "velocity", "stress"]), "mass"]);
-    const fields = new Set(stored);
-    if (stored.has("velocity")) fields.add("velocity_magnitude");
-    if (stored.has("stress")) { fields.add("von_mises"); fields.add("pressure"); }
-    fields.delete("position");
-    const preferred = (output.preview && output.preview.field) || "velocity_magnitude";
-    // Frames are evenly spaced in time, first and last included; a run that stopped early wrote fewer.
-    let frames = output.frames || 1;
-    if (record && record.status !== "succeeded" && record.end_time > 0 && frames > 1) {
-      frames = Math.min(frames, Math.floor((record.sim_time / record.end_time) * (frames - 1) + 1e-9) + 1);
+  // ---------------------------------------------------------------- results: viewer, image, animation
+
+  const RESULT_MODES = [["viewer", "Viewer"], ["image", "Image"], ["animation", "Animation"]];
+  const PLAY_INTERVAL = 180;  // ms between frames while playing (plus the time to fetch each)
+  const PARTICLE_CACHE = 64;  // frames of a finished job kept in the page
+
+  /** One frame's particles (GET .../frames/N/particles): {header, xyz, values}; see docs/service.md. */
+  async function fetchParticles(id, frame, field) {
+    const query = new URLSearchParams({ field });
+    const buffer = await (await api(jobUrl(id, `/frames/${frame}/particles?${query}`), { raw: true })).arrayBuffer();
+    const size = new DataView(buffer).getUint32(0, true);
+    const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, size)));
+    return { header, xyz: new Float32Array(buffer, 4 + size, header.count * 3),
+             values: new Float32Array(buffer, 4 + size + 12 * header.count, header.count) };
+  }
+
+  /** What the viewer frames: the grid's box (or the particles' when the scene has no grid box),
+   *  three numbers each, the particle spacing and the axis drawn upwards. */
+  function viewerOptions(scene, listing, first) {
+    const dimension = listing.dimension;
+    const grid = scene.grid || {};
+    let lower = [0, 0, 0], upper = [0, 0, 0];
+    if (grid.lower && grid.upper) {
+      grid.lower.forEach((v, a) => { lower[a] = v; upper[a] = grid.upper[a]; });
+    } else {
+      lower = [Infinity, Infinity, Infinity].map((v, a) => (a < dimension ? v : 0));
+      upper = [-Infinity, -Infinity, -Infinity].map((v, a) => (a < dimension ? v : 0));
+      for (let i = 0; i < first.header.count; i += 1) {  // a loop: spreading 10^5 values overflows the stack
+        for (let a = 0; a < dimension; a += 1) {
+          const x = first.xyz[3 * i + a];
+          if (Number.isFinite(x)) { lower[a] = Math.min(lower[a], x); upper[a] = Math.max(upper[a], x); }
+        }
+      }
     }
-    return { frames, fields: [...fields].sort(), preferred };
+    if (dimension === 1) upper[1] = lower[1] + 0.5 * (upper[0] - lower[0]);  // the profile's height
+    const cell = Math.min(...[grid.cell_size].flat().filter(Number.isFinite), Infinity);
+    const perCell = Math.max(1, ...(scene.bodies || []).map((b) => Math.max(...[b.particles_per_cell || 2].flat())));
+    const spacing = Number.isFinite(cell) ? cell / perCell : Math.max(...upper.map((u, a) => u - lower[a])) / 50;
+    // up: the axis gravity pulls along (y when there is none)
+    const gravity = (scene.gravity || []).map(Math.abs);
+    const up = dimension === 3 && gravity.length && Math.max(...gravity) > 0 ? gravity.indexOf(Math.max(...gravity)) : 1;
+    return { dimension, lower, upper, spacing, up, axes: listing.axes };
+  }
+
+  /** The job page's results card: a WebGL viewer, the PNG image or the animation of the frames
+   *  the result holds (the count and times come from the result, GET .../frames). */
+  function resultsPanel(id) {
+    const state = { record: null, scene: null, listing: null, mode: null, viewer: null, playing: false,
+                    particles: new Map(), imageUrl: null, animationUrl: null, shown: null };
+    const tabs = h("div", { class: "tabs", role: "tablist" }, RESULT_MODES.map(([mode, label]) =>
+      h("button", { class: "tab", role: "tab", dataset: { mode }, onclick: () => setMode(mode) }, label)));
+    const stage = h("div", { class: "viewer-stage", hidden: true });
+    const colourBar = h("div", { class: "colour-bar" });
+    const image = h("img", { class: "preview-image", alt: "preview of a frame", hidden: true });
+    const animation = h("img", { class: "animation-image", alt: "animation of every frame", hidden: true });
+    const animationLinks = h("div", { class: "row animation-links", hidden: true },
+      h("button", { class: "button small", onclick: () => saveAnimation("gif") }, "Download GIF"),
+      h("button", { class: "button small", onclick: () => saveAnimation("mp4") }, "Download MP4"));
+    const note = h("div", { class: "placeholder" }, "No frame yet.");
+    const frameSlider = h("input", { type: "range", min: 0, max: 0, value: 0, step: 1, "aria-label": "frame",
+                                    oninput: () => { stopPlaying(); showFrame(); } });
+    const frameLabel = h("span", { class: "frame-label" });
+    const fieldSelect = h("select", { "aria-label": "field", onchange: changeField });
+    const play = h("button", { class: "button small play", "aria-label": "play", onclick: togglePlay }, "▶ Play");
+    const controls = h("div", { class: "preview-controls", hidden: true },
+      h("div", { class: "frame-row" }, play, h("label", { class: "slider" }, "Frame", frameSlider), frameLabel),
+      h("label", {}, "Field", fieldSelect));
+    const node = h("section", { class: "card results" },
+      h("div", { class: "toolbar" }, h("h2", {}, "Results"), tabs),
+      h("div", { class: "preview-frame" }, stage, image, animation, note), colourBar, animationLinks, controls);
+
+    const frame = () => Number(frameSlider.value);
+
+    function changeField() {
+      state.particles.clear();
+      (state.mode === "animation" ? showAnimation() : showFrame()).catch(() => {});
+    }
+    const field = () => fieldSelect.value;
+
+    function describeFrame(index) {
+      const listed = state.listing.frames[index];
+      const unit = state.listing.time_unit ? ` ${state.listing.time_unit}` : "";
+      frameLabel.textContent = `frame ${index} / ${state.listing.frames.length - 1} (t = ${fmtNumber(listed.time, 4)}${unit})`;
+    }
+
+    /** The frames the result holds now; the slider follows the newest while it is at the end. */
+    async function refreshFrames() {
+      const atEnd = !state.listing || frame() >= state.listing.frames.length - 1;
+      state.listing = await api(jobUrl(id, "/frames"));
+      const count = state.listing.frames.length;
+      if (!count) return false;
+      if (!fieldSelect.options.length) {
+        const preferred = state.listing.preview_field;
+        fieldSelect.replaceChildren(...state.listing.fields.map((f) => h("option", { value: f, selected: f === preferred }, f)));
+      }
+      frameSlider.max = String(count - 1);
+      if (atEnd) frameSlider.value = String(count - 1);
+      controls.hidden = false;
+      return true;
+    }
+
+    async function showFrame() {
+      if (!state.listing || !state.listing.frames.length) return;
+      const index = frame();
+      describeFrame(index);
+      const key = `${state.mode}:${index}:${field()}`;
+      if (state.shown === key) return;
+      state.shown = key;
+      try {
+        if (state.mode === "viewer") await showParticles(index);
+        else if (state.mode === "image") await showImage(index);
+        note.hidden = true;
+      } catch (error) {
+        if (error instanceof ConnectionLost) throw error;
+        state.shown = null;
+        note.hidden = false;
+        note.textContent = `No frame: ${error.message}`;
+      }
+    }
+
+    async function showParticles(index) {
+      const key = `${index}:${field()}`;
+      const finished = !ACTIVE.has(state.record.status);
+      const data = (finished && state.particles.get(key)) || await fetchParticles(id, index, field());
+      if (finished) {
+        state.particles.set(key, data);
+        // keep the latest frames only (about 12 MB a frame of a million particles)
+        while (state.particles.size > PARTICLE_CACHE) state.particles.delete(state.particles.keys().next().value);
+      }
+      if (!state.viewer) {
+        state.viewer = window.MpmViewer.create(stage, viewerOptions(state.scene, state.listing, data));
+        stage.dataset.ready = "true";
+      }
+      state.viewer.show(data.xyz, data.values, data.header.range);
+      window.MpmViewer.colourBar(colourBar, data.header.label, data.header.range, (x) => fmtNumber(x, 4));
+      stage.dataset.frame = String(data.header.index);
+      stage.dataset.field = data.header.field;
+    }
+
+    async function showImage(index) {
+      const query = new URLSearchParams({ frame: index, field: field() });
+      const url = URL.createObjectURL(await (await api(jobUrl(id, `/preview.png?${query}`), { raw: true })).blob());
+      await new Promise((resolve, reject) => { image.onload = resolve; image.onerror = reject; image.src = url; });
+      if (state.imageUrl) URL.revokeObjectURL(state.imageUrl);
+      state.imageUrl = url;
+      image.dataset.frame = String(index);
+      image.dataset.field = field();
+      image.hidden = state.mode !== "image";
+    }
+
+    async function showAnimation() {
+      stopPlaying();
+      if (ACTIVE.has(state.record.status)) {
+        note.hidden = false;
+        note.textContent = "The animation is made once the job has finished.";
+        return;
+      }
+      note.hidden = false;
+      note.textContent = "Drawing every frame (the first time takes seconds to a minute)…";
+      try {
+        const blob = await (await api(jobUrl(id, `/animation.gif?field=${encodeURIComponent(field())}`), { raw: true })).blob();
+        if (state.animationUrl) URL.revokeObjectURL(state.animationUrl);
+        state.animationUrl = URL.createObjectURL(blob);
+        await new Promise((resolve, reject) => {
+          animation.onload = resolve; animation.onerror = reject; animation.src = state.animationUrl;
+        });
+        animation.dataset.field = field();
+        const shown = state.mode === "animation";
+        animation.hidden = animationLinks.hidden = !shown;
+        note.hidden = true;
+      } catch (error) {
+        if (error instanceof ConnectionLost) throw error;
+        note.textContent = `No animation: ${error.message}`;
+      }
+    }
+
+    async function saveAnimation(kind) {
+      const blob = await (await api(jobUrl(id, `/animation.${kind}?field=${encodeURIComponent(field())}`), { raw: true })).blob();
+      const url = URL.createObjectURL(blob);
+      const link = h("a", { href: url, download: `${(state.record && state.record.name) || id}.${kind}`, hidden: true });
+      document.body.append(link);
+      link.click();
+      link.remove();
+      setTimeout(() => URL.revokeObjectURL(url), 10000);
+    }
+
+    function setMode(mode) {
+      if (mode === "viewer" && !window.MpmViewer.supported()) mode = "image";
+      state.mode = mode;
+      state.shown = null;
+      tabs.querySelectorAll(".tab").forEach((tab) => tab.setAttribute("aria-selected", String(tab.dataset.mode === mode)));
+      stage.hidden = mode !== "viewer";
+      colourBar.hidden = mode !== "viewer";
+      image.hidden = mode !== "image" || !state.imageUrl;
+      animation.hidden = mode !== "animation" || !state.animationUrl;
+      animationLinks.hidden = mode !== "animation" || !state.animationUrl;
+      controls.querySelector(".frame-row").hidden = mode === "animation";
+      if (mode === "animation") showAnimation().catch(() => {});
+      else showFrame().catch(() => {});
+    }
+
+    function stopPlaying() {
+      state.playing = false;
+      play.textContent = "▶ Play";
+      play.setAttribute("aria-label", "play");
+    }
+
+    async function togglePlay() {
+      if (state.playing) { stopPlaying(); return; }
+      state.playing = true;
+      play.textContent = "❚❚ Pause";
+      play.setAttribute("aria-label", "pause");
+      const count = state.listing.frames.length;
+      if (frame() >= count - 1) frameSlider.value = "0";
+      while (state.playing) {
+        await showFrame();
+        await new Promise((resolve) => setTimeout(resolve, PLAY_INTERVAL));
+        if (!state.playing) break;
+        if (frame() >= count - 1) { stopPlaying(); break; }
+        frameSlider.value = String(frame() + 1);
+      }
+    }
+
+    /** The job's record and scene changed (a poll): follow the result as it grows. */
+    async function update(record, scene) {
+      const grew = !state.record || record.step !== state.record.step || record.status !== state.record.status;
+      state.record = record;
+      state.scene = scene;
+      if (!grew || record.status === "queued") return;
+      try {
+        if (!(await refreshFrames())) return;
+      } catch (error) {
+        if (error instanceof ApiError && error.status === 409) return;  // no result file yet
+        throw error;
+      }
+      if (!state.mode) setMode(window.MpmViewer.supported() ? "viewer" : "image");
+      else if (state.mode !== "animation") await showFrame();
+    }
+
+    function stop() {
+      stopPlaying();
+      if (state.viewer) state.viewer.destroy();
+      for (const url of [state.imageUrl, state.animationUrl]) if (url) URL.revokeObjectURL(url);
+    }
+
+    return { node, update, stop };
   }
 
   function jobView(container, id) {
     let record = null;
     let scene = null;
-    let lastPreviewStep = -1;
     let lastSeriesAt = 0;
     let finishedShown = false;
-    let previewUrl = null;
+    const results = resultsPanel(id);
 
     const title = h("h1", {}, "Job");
     const status = h("span");
@@ -495,15 +725,6 @@
     const cancel = h("button", { class: "button danger", onclick: doCancel }, "Cancel");
     const download = h("button", { class: "button", onclick: doDownload }, "Download HDF5");
     const remove = h("button", { class: "button ghost danger", onclick: doDelete }, "Delete");
-    const image = h("img", { class: "preview-image", alt: "preview of the latest frame" });
-    const imageNote = h("div", { class: "placeholder" }, "No frame yet.");
-    const frameSlider = h("input", { type: "range", min: 0, max: 0, value: 0, step: 1, "aria-label": "frame",
-                                    oninput: () => schedulePreview() });
-    const frameLabel = h("span", { class: "frame-label" });
-    const fieldSelect = h("select", { "aria-label": "field", onchange: () => schedulePreview() });
-    const controls = h("div", { class: "preview-controls", hidden: true },
-      h("label", { class: "slider" }, "Frame", frameSlider, frameLabel),
-      h("label", {}, "Field", fieldSelect));
     const plot = h("div", { class: "plot" }, h("div", { class: "placeholder" }, "No energy data yet."));
     const energyNow = h("dl", { class: "stats energies" });
     const sceneBox = h("div", { class: "scene" }, h("div", { class: "placeholder" }, "Loading…"));
@@ -519,7 +740,7 @@
         h("div", { class: "actions" }, cancel, download, remove),
         progress, stats, errorBox),
       h("div", { class: "columns" },
-        h("section", { class: "card" }, h("h2", {}, "Preview"), h("div", { class: "preview-frame" }, image, imageNote), controls),
+        results.node,
         h("section", { class: "card" }, h("h2", {}, "Energy"), plot, energyNow)),
       h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Scene")), sceneBox)),
       h("section", { class: "card" }, h("details", { open: true }, h("summary", {}, h("h2", {}, "Solver log")),
@@ -563,46 +784,6 @@
       remove.disabled = ACTIVE.has(record.status);
     }
 
-    async function loadPreview(frame, field) {
-      const query = new URLSearchParams({ frame });
-      if (field) query.set("field", field);
-      try {
-        const response = await api(jobUrl(id, `/preview.png?${query}`), { raw: true });
-        const url = URL.createObjectURL(await response.blob());
-        await new Promise((resolve, reject) => { image.onload = resolve; image.onerror = reject; image.src = url; });
-        if (previewUrl) URL.revokeObjectURL(previewUrl);
-        previewUrl = url;
-        image.hidden = false;
-        imageNote.hidden = true;
-      } catch (error) {
-        if (error instanceof ConnectionLost) throw error;
-        image.hidden = !previewUrl;
-        imageNote.hidden = false;
-        imageNote.textContent = error instanceof ApiError && error.status === 409
-          ? "No frame yet." : `No preview: ${error.message}`;
-      }
-    }
-
-    let previewTimer = null;
-    function schedulePreview() {
-      const { frames } = previewChoices(scene, record);
-      const frame = Number(frameSlider.value);
-      const end = record && record.end_time;
-      frameLabel.textContent = `${frame + 1} / ${frames}` +
-        (end && frames > 1 ? `  (t ≈ ${fmtNumber((end * frame) / (frames - 1), 3)})` : "");
-      clearTimeout(previewTimer);
-      previewTimer = setTimeout(() => loadPreview(frame, fieldSelect.value).catch(() => {}), 120);
-    }
-
-    function showFinishedControls() {
-      const { frames, fields, preferred } = previewChoices(scene, record);
-      fieldSelect.replaceChildren(...fields.map((f) => h("option", { value: f, selected: f === preferred }, f)));
-      frameSlider.max = String(Math.max(0, frames - 1));
-      frameSlider.value = frameSlider.max;
-      controls.hidden = false;
-      schedulePreview();
-    }
-
     async function loadSeries() {
       lastSeriesAt = Date.now();
       try {
@@ -632,15 +813,11 @@
         scene = await api(jobUrl(id, "/scene"));
         sceneBox.replaceChildren(jsonView(scene));
       }
-      if (record.status === "running" && record.step !== lastPreviewStep) {
-        lastPreviewStep = record.step;
-        await loadPreview(-1, null);
-      }
+      await results.update(record, scene);
       if (record.status === "running" && Date.now() - lastSeriesAt > 4000) await loadSeries();
       if (record.status === "running") await loadLog();
       if (!ACTIVE.has(record.status) && !finishedShown) {
         finishedShown = true;
-        showFinishedControls();
         await loadSeries();
         await loadLog();
       }
@@ -684,10 +861,7 @@
       }
     }
 
-    return new Poller(load, { cleanup: () => {
-      clearTimeout(previewTimer);
-      if (previewUrl) URL.revokeObjectURL(previewUrl);
-    } });
+    return new Poller(load, { cleanup: () => results.stop() });
   }
 
   // ---------------------------------------------------------------- view: new job
@@ -707,7 +881,8 @@
                                    placeholder: "Paste a scene (JSON) here, or start from an example.",
                                    oninput: () => sessionStorage.setItem("mpm.draft", editor.value) });
     editor.value = sessionStorage.getItem("mpm.draft") || "";
-    const examples = h("select", { "aria-label": "example", onchange: pickExample }, h("option", { value: "" }, "Start from an example…"));
+    const examples = h("select", { class: "example-menu", "aria-label": "example", onchange: pickExample },
+      h("option", { value: "" }, "Start from an example…"));
     const file = h("input", { type: "file", accept: ".json,application/json", hidden: true, onchange: pickFile });
     // Mesh files beside the scene: the service never opens a path named in a scene, so a mesh
     // geometry's "file" is sent as the attached file's bytes ("data", base64) and its "format".
@@ -724,7 +899,8 @@
     container.replaceChildren(h("div", { class: "columns new-job" },
       h("section", { class: "card" },
         h("div", { class: "toolbar" }, h("h1", {}, "New job"),
-          h("div", { class: "row" }, examples, h("button", { class: "button ghost", onclick: () => file.click() }, "Open file…"), file,
+          h("div", { class: "row example-row" }, examples,
+            h("button", { class: "button ghost", onclick: () => file.click() }, "Open file…"), file,
             h("button", { class: "button ghost", onclick: () => meshFile.click() }, "Mesh file…"), meshFile)),
         editor, attached,
         h("div", { class: "row end" }, h("label", { class: "inline" }, "Processes", processes), validate, submit)),

@@ -13,11 +13,16 @@ import pytest
 # The live service and its scenes are shared with the SDK tests, one service per session.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "clients"))
 
+import live_scenes  # noqa: E402
 from live_service import LiveService, shared_service  # noqa: E402
+from mpm_client import Client  # noqa: E402
 
 CHROMIUM = Path(os.environ.get("MPM_CHROMIUM", "/usr/bin/chromium"))
+# --enable-unsafe-swiftshader: WebGL (the results viewer) on the CPU, as there is no GPU here;
+# recent Chromium versions no longer fall back to it by themselves.
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--enable-unsafe-swiftshader"]
 VIEWPORT = {"width": 1280, "height": 860}
 SCREENSHOTS = Path(__file__).resolve().parents[2] / "docs" / "images"
 
@@ -25,6 +30,17 @@ SCREENSHOTS = Path(__file__).resolve().parents[2] / "docs" / "images"
 @pytest.fixture(scope="session")
 def live(pytestconfig: pytest.Config, tmp_path_factory: pytest.TempPathFactory) -> LiveService:
     return shared_service(pytestconfig, tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def sdk(live):
+    with Client(live.url, timeout=60) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def example(sdk) -> dict:
+    return sdk.example(live_scenes.EXAMPLE)
 
 
 @pytest.fixture(scope="module")

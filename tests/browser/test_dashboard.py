@@ -12,20 +12,9 @@ import pytest
 from playwright.sync_api import Page, expect
 
 import live_scenes
-from mpm_client import Client, JobCancelled, JobFailed
+from mpm_client import JobCancelled, JobFailed
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
-
-
-@pytest.fixture(scope="module")
-def sdk(live):
-    with Client(live.url, timeout=60) as client:
-        yield client
-
-
-@pytest.fixture(scope="module")
-def example(sdk) -> dict:
-    return sdk.example(live_scenes.EXAMPLE)
 
 
 def fill_scene(page: Page, scene: dict) -> None:
@@ -65,19 +54,16 @@ def test_submit_through_the_form_and_watch_it_succeed(page: Page, example, scree
     page.wait_for_url(re.compile(r"#/jobs/[0-9a-f-]{36}$"))
     expect(page.locator("h1")).to_have_text("Two disks (dashboard)")
 
-    # running: a progress bar short of 100 % and a preview of the latest frame
+    # running: a progress bar short of 100 % and the viewer on the latest frame
     expect(page.locator(".job-head .badge")).to_have_text("running", timeout=60_000)
     percent = float(page.locator(".job-head .progress-label").inner_text().rstrip("%"))
     assert 0.0 <= percent < 100.0
-    expect(page.locator("img.preview-image")).to_be_visible(timeout=30_000)
+    expect(page.locator(".viewer-stage[data-ready] canvas")).to_be_visible(timeout=30_000)
 
     badge = page.locator(".job-head .badge")
     expect(badge).to_have_text(re.compile("succeeded|failed|cancelled"), timeout=120_000)
     assert badge.text_content() == "succeeded", page.locator(".diagnostic").text_content()
     expect(page.locator(".job-head .progress-label")).to_have_text("100.0%")
-    image = page.locator("img.preview-image")
-    expect(image).to_be_visible()
-    page.wait_for_function("document.querySelector('img.preview-image').naturalWidth > 0")
 
     # the energy plot: kinetic, strain and total, each a line of many points
     lines = page.locator("svg.energy-plot polyline.series")
@@ -85,20 +71,26 @@ def test_submit_through_the_form_and_watch_it_succeed(page: Page, example, scree
     for i in range(3):
         assert len(lines.nth(i).get_attribute("points").split()) > 100
 
-    # frames and fields of the finished job
+    # frames and fields of the finished job: the slider, its label and the image agree
     slider = page.get_by_label("frame")
-    assert (slider.get_attribute("max"), slider.input_value()) == ("15", "15")
-    before = image.get_attribute("src")
+    expect(slider).to_have_attribute("max", "15")
+    assert slider.input_value() == "15"
+    expect(page.locator(".viewer-stage")).to_have_attribute("data-frame", "15")
     slider.fill("0")
-    expect(page.locator(".frame-label")).to_contain_text("1 / 16")
-    expect(image).not_to_have_attribute("src", before)
+    expect(page.locator(".frame-label")).to_have_text("frame 0 / 15 (t = 0)")
+    expect(page.locator(".viewer-stage")).to_have_attribute("data-frame", "0")
+    page.locator('.tab[data-mode="image"]').click()
+    image = page.locator("img.preview-image")
+    expect(image).to_have_attribute("data-frame", "0")
+    expect(image).to_be_visible()
     page.get_by_label("field").select_option("von_mises")
     page.wait_for_function("document.querySelector('img.preview-image').naturalWidth > 0")
     expect(page.locator(".scene pre.json")).to_contain_text('"Two disks (dashboard)"')
 
     slider.fill("15")
     page.get_by_label("field").select_option("velocity_magnitude")
-    page.wait_for_timeout(800)  # the debounced preview of the last frame
+    expect(image).to_have_attribute("data-frame", "15")
+    expect(image).to_have_attribute("data-field", "velocity_magnitude")
     screenshot(page, "div.columns", screenshot_dir / "dashboard-job.png")
 
 

@@ -153,3 +153,11 @@ def test_submit_inlines_a_points_file_as_positions_and_volumes(fake, servers, tm
     assert cli.main(["submit", str(scene)]) == 0
     assert sent_json(fake.requests[-1])["scene"]["bodies"][0]["geometry"] == {
         "type": "points", "positions": [[0.1, 0.2], [0.3, 0.4]], "volumes": [0.001, 0.002]}
+
+@pytest.mark.parametrize("command", [["submit"], ["sweep", "-p", "/time/dt=1,2"]], ids=["submit", "sweep"])
+def test_a_scene_file_with_a_json_syntax_error_names_its_line_and_column(fake, servers, tmp_path, capsys, command):
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"version": 1,\n  "name": }')  # the value is missing at line 2, column 11
+    assert cli.main([command[0], str(broken), *command[1:]]) == 1
+    assert f"{broken} is not valid JSON: line 2, column 11: Expecting value" in capsys.readouterr().err
+    assert not fake.calls("POST", "/v1/jobs") and not fake.calls("POST", "/v1/sweeps")  # nothing was sent

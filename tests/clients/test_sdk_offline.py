@@ -201,6 +201,21 @@ def test_preview_passes_frame_and_field_and_writes_the_file(fake, client, tmp_pa
     assert (params["frame"], params["field"]) == ("3", "von_mises")
 
 
+def test_animate_asks_for_the_format_of_the_suffix_and_writes_the_file(fake, client, tmp_path):
+    gif, mp4 = b"GIF89a" + b"\0" * 16, b"\0\0\0\x18ftypmp42"
+    fake.on("GET", JOB, httpx.Response(200, json=job_record("succeeded")))
+    fake.on("GET", f"{JOB}/animation.gif", httpx.Response(200, content=gif))
+    fake.on("GET", f"{JOB}/animation.mp4", httpx.Response(200, content=mp4))
+    job = client.job(JOB_ID)
+    assert job.animate(tmp_path / "run.gif", field="von_mises").read_bytes() == gif
+    assert job.animate(tmp_path / "run.MP4").read_bytes() == mp4
+    assert fake.calls("GET", f"{JOB}/animation.gif")[0].url.params["field"] == "von_mises"
+    assert "field" not in fake.calls("GET", f"{JOB}/animation.mp4")[0].url.params
+    with pytest.raises(ValueError, match="a .gif or an .mp4"):
+        job.animate(tmp_path / "run.avi")
+    assert not (tmp_path / "run.avi").exists()
+
+
 def test_series_are_numpy_arrays(fake, client):
     np = pytest.importorskip("numpy")
     fake.on("GET", JOB, httpx.Response(200, json=job_record("succeeded")))

@@ -109,6 +109,38 @@ def test_invalid_json_is_a_validation_error(api):
     assert detail["path"] == "" and "JSON" in detail["message"]
 
 
+# A comma missing after line 2's value: the parser stops at the next key, line 3, column 3
+# (1-based, as json.JSONDecodeError counts); the same text on each route that reads JSON.
+MISSING_COMMA = b'{\n  "dimension": 2\n  "name": "x"\n}'
+
+
+@pytest.mark.parametrize("route", ["/v1/scenes/validate", "/v1/jobs", "/v1/sweeps"])
+def test_json_syntax_errors_give_line_and_column(api, route):
+    answer = api.post(route, content=MISSING_COMMA, headers={"content-type": "application/json"})
+    assert answer.status_code == 422
+    [detail] = answer.json()["error"]["details"]
+    assert (detail["path"], detail["line"], detail["column"]) == ("", 3, 3)
+    assert detail["message"] == "not valid JSON: line 3, column 3: Expecting ',' delimiter"
+
+
+@pytest.mark.parametrize("route", ["/v1/jobs", "/v1/sweeps"])
+def test_a_bare_scene_is_one_error_that_says_to_wrap_it(api, stack, route):
+    files_before = _jobs_on_disk(stack)
+    answer = api.post(route, json=two_disks())
+    assert answer.status_code == 422
+    [detail] = answer.json()["error"]["details"]
+    assert detail["path"] == "" and '{"scene": <the scene>}' in detail["message"]
+    assert "bare scene" in detail["message"] and "bodies" in detail["message"]
+    assert _jobs_on_disk(stack) == files_before
+
+
+def test_validate_names_a_wrapped_scene(api):
+    answer = api.post("/v1/scenes/validate", json={"scene": two_disks()})
+    assert answer.status_code == 422
+    [detail] = answer.json()["error"]["details"]
+    assert detail["path"] == "scene" and "takes the scene itself" in detail["message"]
+
+
 def test_validate_answers_the_summary(api):
     answer = api.post("/v1/scenes/validate", json=two_disks())
     assert answer.status_code == 200, answer.text

@@ -280,3 +280,65 @@ def test_the_two_disks_example_end_to_end_through_the_sdk(stack, tmp_path):
         with pytest.raises(ValidationFailed) as failure:
             client.submit(bad)
         assert [e["path"] for e in failure.value.errors] == ["bodies[0].geometry.radius"]
+
+
+def unpack_particles(body: bytes) -> tuple[dict, "np.ndarray", "np.ndarray"]:
+    """The viewer's particle packing (docs/service.md): uint32 n, n bytes of JSON, float32 xyz, float32 values."""
+    import numpy as np
+    size = int.from_bytes(body[:4], "little")
+    header = json.loads(body[4:4 + size])
+    count = header["count"]
+    xyz = np.frombuffer(body, "<f4", count * 3, 4 + size).reshape(count, 3)
+    values = np.frombuffer(body, "<f4", count, 4 + size + 12 * count)
+    assert len(body) == 4 + size + 16 * count
+    return header, xyz, values
+
+
+def test_frames_particles_and_animation_come_from_the_result(api):
+    import numpy as np
+    scene = two_disks("viewer", end=0.2)
+    scene["output"] = {"frames": 5, "fields": ["position", "velocity", "stress"]}
+    scene["units"] = {"length": "m", "time": "s", "mass": "kg", "stress": "Pa"}
+    job = submit(api, scene)
+    assert wait_for_status(api, job["id"])["status"] == "succeeded"
+    result = api.get(f"/v1/jobs/{job['id']}/result.h5")
+    with h5py.File(io.BytesIO(result.content), "r") as h5:
+        names = sorted(h5["frames"])
+        times = [float(h5["frames"][name].attrs["time"]) for name in names]
+        position = h5["frames"][names[2]]["position"][()]
+        speed = np.linalg.norm(h5["frames"][names[2]]["velocity"][()], axis=1)
+
+    listing = api.get(f"/v1/jobs/{job['id']}/frames").json()
+    assert [f["time"] for f in listing["frames"]] == times and [f["index"] for f in listing["frames"]] == [0, 1, 2, 3, 4]
+    assert {"velocity_magnitude", "von_mises", "stress"} <= set(listing["fields"])
+    assert listing["axes"] == ["x [m]", "y [m]"] and listing["time_unit"] == "s" and listing["dimension"] == 2
+
+    answer = api.get(f"/v1/jobs/{job['id']}/frames/2/particles", params={"field": "velocity_magnitude"})
+    assert answer.status_code == 200 and answer.headers["content-type"] == "application/octet-stream"
+    header, xyz, values = unpack_particles(answer.content)
+    assert (header["index"], header["time"], header["label"]) == (2, times[2], "velocity_magnitude [m/s]")
+    # float32 of the stored float64: within its rounding, 2^-24 relative
+    np.testing.assert_allclose(xyz[:, :2], position, rtol=2**-23)
+    assert np.all(xyz[:, 2] == 0)
+    np.testing.assert_allclose(values, speed, rtol=2**-23, atol=1e-30)
+    # the colour range: the values' own (widened around them when they are all equal, as here)
+    low, high = header["range"]
+    assert low <= speed.min() <= speed.max() <= high and high > low
+    bad = api.get(f"/v1/jobs/{job['id']}/frames/9/particles")
+    assert bad.status_code == 422 and bad.json()["error"]["details"][0]["path"] == "frame"
+
+    gif = api.get(f"/v1/jobs/{job['id']}/animation.gif", timeout=300)
+    assert gif.status_code == 200 and gif.headers["content-type"] == "image/gif"
+    from PIL import Image
+    assert Image.open(io.BytesIO(gif.content)).n_frames == 5
+    wrong = api.get(f"/v1/jobs/{job['id']}/animation.gif", params={"field": "nope"})
+    assert wrong.status_code == 422 and wrong.json()["error"]["details"][0]["path"] == "field"
+
+
+def test_a_failed_job_lists_the_frames_it_wrote(api):
+    job = submit(api, unstable("viewer-unstable"))
+    assert wait_for_status(api, job["id"])["status"] == "failed"
+    frames = api.get(f"/v1/jobs/{job['id']}/frames").json()["frames"]
+    with h5py.File(io.BytesIO(api.get(f"/v1/jobs/{job['id']}/result.h5").content), "r") as h5:
+        stored = sorted(float(group.attrs["time"]) for group in h5["frames"].values())
+    assert [f["time"] for f in frames] == stored and frames[-1]["time"] < 5.0

@@ -37,6 +37,16 @@ class Call:
     path: str
     params: dict[str, Any] | None = None
     json: Any = None
+    # seconds to wait for the answer, when the client's own timeout is too short for it
+    timeout: float | None = None
+
+    @property
+    def timeout_option(self) -> Any:
+        return httpx.USE_CLIENT_DEFAULT if self.timeout is None else self.timeout
+
+
+# An animation is rendered on its first request: up to a minute, more on a busy server.
+ANIMATION_SECONDS = 600.0
 
 
 def job_path(job_id: str, tail: str = "") -> str:
@@ -99,6 +109,15 @@ def preview(job_id: str, frame: int, field_name: str | None) -> Call:
     if field_name:
         params["field"] = field_name
     return Call("GET", job_path(job_id, "/preview.png"), params=params)
+
+
+def animation(job_id: str, path: str | os.PathLike[str], field_name: str | None) -> Call:
+    """The job's animation in the format of ``path``'s suffix (.gif or .mp4)."""
+    kind = Path(path).suffix.lower().lstrip(".")
+    if kind not in ("gif", "mp4"):
+        raise ValueError(f"cannot write {Path(path).name!r}: an animation is a .gif or an .mp4 file")
+    return Call("GET", job_path(job_id, f"/animation.{kind}"), params={"field": field_name} if field_name else None,
+                timeout=ANIMATION_SECONDS)
 
 
 def example(name: str) -> Call:

@@ -93,7 +93,8 @@ class AsyncClient:
         retrier = self._retrier(call)
         while True:
             try:
-                async with self._http.stream(call.method, call.path, params=call.params) as response:
+                async with self._http.stream(call.method, call.path, params=call.params,
+                                             timeout=call.timeout_option) as response:
                     if response.is_error:
                         await response.aread()
                     delay = retrier.after_response(response)
@@ -164,6 +165,9 @@ class AsyncJob:
             with _api.atomic_file(path) as out:
                 out.write(image)
         return image
+
+    async def animate(self, path: str | os.PathLike[str], field: str | None = None) -> Path:
+        return await self.client._download(_api.animation(self.id, path, field), path)
 
     async def series(self) -> dict[str, Any]:
         return _api.to_arrays((await self.client._send(_api.Call("GET", _api.job_path(self.id, "/series")))).json())

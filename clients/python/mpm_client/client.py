@@ -127,7 +127,8 @@ class Client:
         retrier = self._retrier(call)
         while True:
             try:
-                with self._http.stream(call.method, call.path, params=call.params) as response:
+                with self._http.stream(call.method, call.path, params=call.params,
+                                       timeout=call.timeout_option) as response:
                     if response.is_error:
                         response.read()
                     delay = retrier.after_response(response)
@@ -210,6 +211,12 @@ class Job:
             with _api.atomic_file(path) as out:
                 out.write(image)
         return image
+
+    def animate(self, path: str | os.PathLike[str], field: str | None = None) -> Path:
+        """Every frame as an animation, written to ``path``: a ``.gif`` or an ``.mp4`` (H.264),
+        coloured by ``field`` (default: the scene's preview field). The service renders it
+        once the job has finished (seconds to a minute the first time) and keeps it."""
+        return self.client._download(_api.animation(self.id, path, field), path)
 
     def series(self) -> dict[str, Any]:
         """The time series (time, dt, kinetic_energy, ...) as numpy arrays (needs numpy)."""
