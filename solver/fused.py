@@ -47,6 +47,7 @@ import numpy as np
 from numba import njit
 
 from solver import shape
+from solver.thermal_schema import conducts
 from solver.threads import add_copies
 
 FUSED_SHAPES = frozenset({"linear", "quadratic_bspline"})   # the 1D weights `_axis` writes out
@@ -64,6 +65,7 @@ def supports(scene) -> bool:
             and method.shape_function in FUSED_SHAPES and not scene.axisymmetric
             and scene.dimension in (2, 3)
             and not any(m.model == "rigid" for m in scene.materials.values())
+            and not conducts(scene)   # conduction reads the stored stencil (solver/thermal.py)
             and (method.transfer != "apic" or shape.REGISTRY[method.shape_function].apic_d is not None))
 
 
