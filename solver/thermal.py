@@ -227,12 +227,11 @@ class Conduction:
         sim.domain.sum_ghosts(self.heat)
 
     def before_update(self, sim, dt: float) -> None:
-        thermal_kernels.nodal_temperature(self.heat, self.cutoff, self.T_old)
         faces = self._faces
         rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
-                                             faces.ambient, self.faces.axis, self.heat, self.cutoff, self.T_old)
+                                             faces.ambient, self.faces.axis, self.heat, self.cutoff)
         self.boundary_heat += dt * rate
-        thermal_kernels.advance(dt, self.heat, self.cutoff, self.T_old, self.T_new)
+        thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new)
         thermal_kernels.hold(self.held.node, self.T_now, self.T_old)
         thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
         sim.domain.share_nodes(self.T_old, self.T_new)

@@ -46,30 +46,33 @@ def _p2g_block(dims, nodes, start, stop, idx, w, dw, mass, capacity, T, volume, 
             heat[node, 2] += vol * q
 
 
-@njit(parallel=True, cache=True)
-def nodal_temperature(heat, cutoff, T_grid):
-    """T_I^t = (C T)_I / C_I where the node has capacity, 0 elsewhere (eq. 5.25)."""
-    for i in prange(heat.shape[0]):
-        T_grid[i] = heat[i, 1] / heat[i, 0] if heat[i, 0] > cutoff else 0.0
+# The nodal kernels are serial: a pass over the nodes costs less than waking the
+# threads (measured 7-13 ms per parallel region on a loaded 2-core machine, against
+# 0.1 ms for 40k nodes on one core).
 
-
-@njit(parallel=True, cache=True)
-def advance(dt, heat, cutoff, T_old, T_new):
-    """T~_I^{t+dt} = T_I^t + dt Q_I / C_I (Algorithm 8, line 9)."""
-    for i in prange(heat.shape[0]):
-        T_new[i] = T_old[i] + dt * heat[i, 2] / heat[i, 0] if heat[i, 0] > cutoff else 0.0
+@njit(cache=True)
+def integrate(dt, heat, cutoff, T_old, T_new):
+    """T_I^t = (C T)_I / C_I (eq. 5.25) and T~_I^{t+dt} = T_I^t + dt Q_I / C_I (Algorithm 8,
+    line 9) where the node has capacity; 0 elsewhere."""
+    for i in range(heat.shape[0]):
+        if heat[i, 0] > cutoff:
+            T_old[i] = heat[i, 1] / heat[i, 0]
+            T_new[i] = T_old[i] + dt * heat[i, 2] / heat[i, 0]
+        else:
+            T_old[i] = 0.0
+            T_new[i] = 0.0
 
 
 @njit(cache=True)
-def boundary_heat(node, area, flux, coefficient, ambient, which, heat, cutoff, T_old):
-    """Q_I += A_I (q* + h (T_amb - T_I^t)) on the faces' nodes that have capacity; returns
-    the heat rate that entered (W)."""
+def boundary_heat(node, area, flux, coefficient, ambient, which, heat, cutoff):
+    """Q_I += A_I (q* + h (T_amb - T_I^t)) on the faces' nodes that have capacity, with
+    T_I^t = (C T)_I / C_I; returns the heat rate that entered (W)."""
     total = 0.0
     for j in range(node.shape[0]):
         i = node[j]
         if heat[i, 0] > cutoff:
             c = which[j]
-            rate = area[j] * (flux[c] + coefficient[c] * (ambient[c] - T_old[i]))
+            rate = area[j] * (flux[c] + coefficient[c] * (ambient[c] - heat[i, 1] / heat[i, 0]))
             heat[i, 2] += rate
             total += rate
     return total
@@ -113,10 +116,10 @@ def _g2p_remap_block(nodes, start, stop, idx, w, T_old, T_new, mass, capacity, T
             remapped[idx[p, k]] += w[p, k] * mct
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def remapped_temperature(heat, remapped, cutoff, T_grid):
     """T_I^{t+dt} = remapped_I / C_I^t (line 13)."""
-    for i in prange(heat.shape[0]):
+    for i in range(heat.shape[0]):
         T_grid[i] = remapped[i] / heat[i, 0] if heat[i, 0] > cutoff else 0.0
 
 
@@ -152,14 +155,14 @@ def thermal_energy(mass, capacity, T):
     return total
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def expand(stress, T, T_ref, alpha, bulk, total):
     """sigma_p -= 3 K alpha (T_p - T_ref,p) I: the stress of the isotropic thermal strain
     alpha dT I under isotropic elasticity ([R] 5.26: C : (alpha dT I) = 3 K alpha dT I).
     A rate model (`total` 1-D flag) takes the increment since its last stress update and
     moves T_ref on; a total one the whole change since the start."""
     rate = total.ndim == 1
-    for p in prange(stress.shape[0]):
+    for p in range(stress.shape[0]):   # serial: cheaper than waking the threads
         s = 3.0 * bulk * alpha * (T[p] - T_ref[p])
         for a in range(3):
             stress[p, a, a] -= s
