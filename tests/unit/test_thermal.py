@@ -3,7 +3,7 @@ thermal in a scene without them, the time step's conduction limit, threads, the
 run's fields and series, and the heat of plastic work in the conducted field."""
 from __future__ import annotations
 
-import copy
+import math
 
 import numpy as np
 import pytest
@@ -12,6 +12,7 @@ from solver import run
 from solver.results import read_frame, read_series
 from solver.scene import SceneError, load_scene
 from solver.stepper import ExplicitMPM
+from solver.summary import summarize
 
 BAR = {"model": "linear_elastic", "density": 2.0, "youngs_modulus": 1.0, "poisson_ratio": 0.0,
        "thermal_conductivity": 4.0, "specific_heat": 3.0}
@@ -116,6 +117,13 @@ class TestStep:
         sim = ExplicitMPM(load_scene(scene(dim=2)))
         limit = 2.0 * 3.0 / (2 * 4.0 * (2 / 0.1**2))
         assert sim.stable_time_step(0.5) == pytest.approx(0.5 * limit, rel=1e-14)
+
+    def test_the_summary_estimates_the_steps_with_the_conduction_limit(self):
+        data = load_scene(scene(dim=2))
+        limit = 2.0 * 3.0 / (2 * 4.0 * (2 / 0.1**2))
+        summary = summarize(data)
+        assert summary.dt == pytest.approx(0.5 * limit, rel=1e-14)
+        assert summary.estimated_steps == math.ceil(0.01 / (0.5 * limit))
 
     def test_two_threads_give_one_thread_s_temperatures(self):
         """Only the order of the per-thread nodal sums differs: round-off."""
