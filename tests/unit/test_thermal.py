@@ -186,3 +186,48 @@ def test_the_heat_of_plastic_work_is_conducted():
     assert heat[0] > 0
     assert heat[1] == pytest.approx(heat[0], rel=1e-6)
     assert np.ptp(conducted.particles.extra["temperature"]) < np.ptp(adiabatic.particles.extra["temperature"])
+
+
+@pytest.mark.parametrize("scheme", ["usl", "usf"])
+def test_every_scheme_conducts_as_musl_where_nothing_moves(scheme):
+    """The thermal hook sits at the same named points in every scheme: with the particles
+    at rest the temperatures are MUSL's, bit for bit."""
+    temperatures = []
+    for name in ("musl", scheme):
+        data = scene(conditions=[{"type": "temperature", "face": "x+", "temperature": 30.0},
+                                 {"type": "convection", "face": "x-", "coefficient": 1.0, "ambient": 0.0}],
+                     method={"scheme": name})
+        sim = ExplicitMPM(load_scene(data))
+        for _ in range(100):
+            sim.advance(5e-3)
+        temperatures.append(sim.particles.extra["temperature"].copy())
+    assert np.array_equal(temperatures[0], temperatures[1])
+    assert np.ptp(temperatures[0]) > 1.0
+
+
+def test_johnson_cook_softens_with_the_conducted_temperature():
+    """A Johnson-Cook bar at room temperature (300 K), its ends held at 800 K, heats by
+    conduction for 0.5 ms and is then squeezed (m = 1, no hardening, no plastic heat):
+    every particle that flows does so at A (1 - T*) with T* = (T_p - T_room)/(T_melt -
+    T_room) of its conducted temperature, to round-off (the return maps the von Mises
+    stress onto the flow stress exactly), and none is above it."""
+    jc = {**JC, "melt_temperature": 1300.0, "taylor_quinney": 0.0, "thermal_conductivity": 1.0e9}
+    data = scene(material=jc, conditions=[
+        {"type": "temperature", "face": "x-", "temperature": 800.0},
+        {"type": "temperature", "face": "x+", "temperature": 800.0},
+        {"type": "velocity", "where": {"type": "box", "lower": [0.99], "upper": [1.1]},
+         "velocity": ["where(t > 5e-4, -10, 0)"]},
+        {"type": "wall", "face": "x-", "mode": "stick"}])
+    data["bodies"][0]["initial_temperature"] = 300.0
+    sim = ExplicitMPM(load_scene(data))
+    for _ in range(900):
+        sim.advance(1e-6)
+    T = sim.particles.extra["temperature"]
+    assert T.min() > 400.0 and T.max() < 1300.0   # heated, unevenly, not molten
+    s = sim.particles.stress
+    von_mises = np.abs(s[:, 0, 0] - s[:, 1, 1])   # uniaxial strain: sigma_yy = sigma_zz
+    flow_stress = JC["A"] * (1.0 - (T - 300.0) / (1300.0 - 300.0))
+    flowing = sim.particles.extra["plastic_strain_rate"] > 0   # yielded in the last step
+    assert flowing.sum() >= 10   # the others unload in the reflected waves
+    assert np.allclose(von_mises[flowing], flow_stress[flowing], rtol=1e-9, atol=0)
+    assert np.all(von_mises <= flow_stress * (1 + 1e-9))
