@@ -17,7 +17,6 @@ E13, the boundary heat balance, the axisymmetric tube, thermal expansion).
 from __future__ import annotations
 
 import argparse
-import copy
 import math
 import sys
 import time
