@@ -20,7 +20,7 @@ from solver.loads import AppliedLoads, BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, material_slices
-from solver.thermal_schema import conducts
+from solver.thermal_schema import conducts, expands
 from solver.transfer import AffineTransfer
 
 # Nodes whose mass is below this fraction of the lightest particle's mass get no
@@ -48,6 +48,7 @@ class Energies:
     external_work: float
     boundary_work: float
     damping_work: float = 0.0   # work of the damping forces (<= 0), solver/damping.py
+    thermal: float = 0.0        # the most mechanical energy thermal expansion can have given (solver/thermal.py)
 
     @property
     def total(self) -> float:
@@ -70,6 +71,7 @@ class ExplicitMPM:
         self._model_of = {name: model for name, (model, _) in zip(slices, self.materials)}
         thermal.setup(scene, self.particles)   # nothing without thermal keys
         self.conduction = thermal.Conduction(scene, self.particles) if conducts(scene) else None
+        self.expansion = thermal.ThermalExpansion(scene, self._model_of) if expands(scene) else None
         self.shape = shape.get(method.shape_function)
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
@@ -189,7 +191,7 @@ class ExplicitMPM:
         p = self.particles
         strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
         local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work,
-                 self.damping_work]
+                 self.damping_work, self.expansion.energy_bound(self) if self.expansion is not None else 0.0]
         return Energies(*(float(e) for e in self.domain.sum(local)))
 
     def thermal_series(self) -> dict[str, float]:

@@ -64,7 +64,8 @@ def init_particles(scene, particles) -> None:
         particles.extra["conductivity"] = _per_particle(scene, particles.body, lambda m: m.thermal_conductivity)
         particles.require("heat_flux", (particles.dimension,))
     if expands(scene):
-        particles.extra["expansion_temperature"] = T.copy()
+        particles.extra["expansion_temperature"] = T.copy()   # T the stress last took in (rate models)
+        particles.extra["start_temperature"] = T.copy()
 
 
 def setup(scene, particles) -> None:
@@ -268,8 +269,10 @@ class ThermalExpansion:
     (thermal_kernels.expand): rate models (hypoelastic, J2) take each step's increment
     of T, total ones (neo-Hookean, Johnson-Cook's EOS pressure) the change since the start."""
 
-    def __init__(self, alpha_of_model: dict):
-        self.alpha_of_model = alpha_of_model   # solver model -> alpha, for the expanding materials
+    def __init__(self, scene, model_of: dict):
+        # solver model -> alpha, for the expanding materials
+        self.alpha_of_model = {model: float(scene.materials[name].thermal_expansion)
+                               for name, model in model_of.items() if scene.materials[name].thermal_expansion}
 
     def after_stress(self, sim, dt: float) -> None:
         x = sim.particles.extra
@@ -279,6 +282,19 @@ class ThermalExpansion:
                 thermal_kernels.expand(sim.particles.stress[sl], x["temperature"][sl],
                                        x["expansion_temperature"][sl], alpha, model.thermal_bulk_modulus,
                                        kernels.flag(model.total_stress))
+
+    def energy_bound(self, sim) -> float:
+        """sum_p V_p 9/2 K alpha^2 (T_p - T0_p)^2: the strain energy of the thermal strain
+        held fully (a clamped body), the most heating can give the mechanics at once (a
+        free body heated suddenly turns it into motion). The runner counts it as supplied."""
+        p, x = sim.particles, sim.particles.extra
+        total = 0.0
+        for model, sl in sim.materials:
+            alpha = self.alpha_of_model.get(model)
+            if alpha:
+                rise = x["temperature"][sl] - x["start_temperature"][sl]
+                total += 4.5 * model.thermal_bulk_modulus * alpha**2 * float(np.dot(p.volume[sl], rise * rise))
+        return total
 
 
 def make_conduction(sim):
@@ -290,8 +306,4 @@ def make_conduction(sim):
 
 def make_expansion(sim):
     """The thermal expansion hook of a scene with a thermal_expansion coefficient, else None."""
-    if not expands(sim.scene):
-        return None
-    materials = sim.scene.materials
-    return ThermalExpansion({model: float(materials[name].thermal_expansion or 0.0)
-                             for name, model in sim.model_of.items()})
+    return sim.expansion

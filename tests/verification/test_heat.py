@@ -114,3 +114,22 @@ class TestThermalExpansion:
             assert mean[f"strain_{axis}"] == pytest.approx((1 + nu) * hc.ALPHA * hc.HEATING, rel=1e-2)
             assert abs(mean[f"stress_{axis}"]) < 1e-2 * scale
         assert mean["stress_2"] == pytest.approx(-scale, rel=1e-2)
+
+
+class TestEnergyOfExpansion:
+    """The runner counts 9/2 K alpha^2 dT^2 V (the strain energy of the thermal strain held
+    fully) as energy supplied by heat: it is the clamped bar's strain energy exactly,
+    and a free bar heated at once runs to the end without tripping the energy check."""
+
+    def test_the_bound_is_the_clamped_bar_s_strain_energy(self):
+        sim = hc.heated_bar("linear_elastic", clamped=True)
+        energies = sim.energies()
+        assert energies.thermal == pytest.approx(energies.strain, rel=1e-9)
+        assert energies.thermal > 0
+
+    def test_a_suddenly_heated_free_bar_runs_to_the_end(self, tmp_path):
+        from solver import run
+        scene = hc.heated_bar_scene("linear_elastic", clamped=False)
+        scene["boundary_conditions"][0]["temperature"] = "where(t > 0, 400, 300)"   # the whole rise at once
+        result = run(scene, tmp_path)
+        assert (result.status, result.reason) == ("complete", "finished")
