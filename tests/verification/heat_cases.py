@@ -27,12 +27,16 @@ UNIT = {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.0, "thermal_co
         "specific_heat": 1.0}
 
 
-def bar_scene(cells: int, dt: float, end: float = 0.05) -> dict:
-    """E12 as a scene (the stick walls only keep the mechanics, which has no load, idle)."""
-    return {"dimension": 1, "method": {"scheme": "musl"},
-            "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 1.0 / cells},
+def bar_scene(cells: int, dt: float, end: float = 0.05, dim: int = 1) -> dict:
+    """E12 as a scene (the stick walls only keep the mechanics, which has no load, idle); in
+    2D or 3D a bar of two cells' cross-section, insulated on its sides."""
+    h = 1.0 / cells
+    upper = [1.0] + [2 * h] * (dim - 1)
+    return {"dimension": dim, "method": {"scheme": "musl"},
+            "grid": {"lower": [0.0] * dim, "upper": upper, "cell_size": h},
             "materials": {"bar": {"model": "linear_elastic", **UNIT}},
-            "bodies": [{"name": "bar", "material": "bar", "geometry": {"type": "box", "lower": [0.0], "upper": [1.0]},
+            "bodies": [{"name": "bar", "material": "bar",
+                        "geometry": {"type": "box", "lower": [0.0] * dim, "upper": upper},
                         "particles_per_cell": 1, "initial_temperature": 0.0}],
             "boundary_conditions": [{"type": "temperature", "face": "x-", "temperature": 0.0},
                                     {"type": "temperature", "face": "x+", "temperature": 1.0},
@@ -52,9 +56,9 @@ def advance_to(sim: ExplicitMPM, t: float, dt: float) -> None:
         sim.advance(min(dt, t - sim.time))
 
 
-def bar_errors(cells: int, dt: float, times=(0.0075, 0.03, 0.05)) -> dict[float, tuple[float, float]]:
+def bar_errors(cells: int, dt: float, times=(0.0075, 0.03, 0.05), dim: int = 1) -> dict[float, tuple[float, float]]:
     """{t: (max nodal error of T_I^{t+dt}, max particle error)} of E12."""
-    sim = ExplicitMPM(load_scene(bar_scene(cells, dt, max(times))))
+    sim = ExplicitMPM(load_scene(bar_scene(cells, dt, max(times), dim)))
     nodes = sim.grid.node_positions()[:, 0]
     out = {}
     for t in times:

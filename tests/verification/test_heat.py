@@ -25,6 +25,16 @@ class TestE12Bar:
             order = math.log2(coarse[t][0] / fine[t][0])
             assert order > 1.8, f"t = {t}: observed order {order:.2f}"
 
+    @pytest.mark.slow
+    def test_a_bar_in_3d_conducts_as_in_1d(self):
+        """The same bar, two cells square, insulated sides: the 1D solution (to round-off of
+        the 1D run's errors, 1e-9, since nothing varies across the bar)."""
+        dt = 0.5 * 0.02**2 / (2 * 3)   # half the 3D limit h^2 / (2 d k)
+        one, three = hc.bar_errors(50, dt), hc.bar_errors(50, dt, dim=3)
+        for t in one:
+            assert three[t][0] == pytest.approx(one[t][0], rel=1e-9)
+            assert three[t][0] < 1e-2
+
     def test_the_particle_temperatures_are_noisier_than_the_grid_s(self):
         """[R] Fig. 51: particle data noisy, grid data (T_I^{t+dt}) smooth; both near the exact series."""
         errors = hc.bar_errors(100, dt=5e-5, times=(0.03,))[0.03]
