@@ -45,7 +45,6 @@ from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
 from solver.materials.rigid import Rigid
 from solver.parallel.slabs import scene_problems as slab_problems
-from solver.thermal_schema import thermal_problems
 from solver.schema import (
     Boolean,
     NonNegative,
@@ -58,6 +57,7 @@ from solver.schema import (
     supported,
     scene_error,
 )
+from solver.thermal_schema import thermal_problems
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")

@@ -98,11 +98,6 @@ class ExplicitMPM:
         masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
 
-    @property
-    def model_of(self) -> dict:
-        """The solver model of each material name (made once per run)."""
-        return self._model_of
-
     def add_hook(self, hook) -> None:
         """Plug an object with any of the hook methods (solver/step/hooks.py) into the step,
         after the scene's own hooks."""

@@ -12,7 +12,6 @@ from __future__ import annotations
 from solver.schema import ElasticMaterial, fmt
 
 THERMAL_KEYS = ("thermal_conductivity", "specific_heat", "thermal_expansion")
-THERMAL_CONDITION_TYPES = ("temperature", "heat_flux", "convection")
 
 
 def conducts(scene) -> bool:

@@ -22,7 +22,7 @@ boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress).
 
-A hook that needs the stored stencil (the hoop terms) runs with the general kernels
+A hook that needs the stored stencil (the hoop terms, conduction) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
 shares are not hooks: they complete each grid phase, after every hook of the point
 has added its part (solver/step/phases.py).
