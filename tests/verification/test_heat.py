@@ -78,6 +78,19 @@ class TestBoundaryHeat:
         assert gain == pytest.approx(expected, rel=1e-12)
 
 
+    @pytest.mark.parametrize("face,area", [("x+", 2 * math.pi), ("y+", math.pi), ("y-", math.pi)])
+    def test_axisymmetric_faces_take_their_ring_areas(self, face, area):
+        """The unit cylinder (r, z in [0, 1]): a unit flux brings 2 pi R H through its side
+        and pi R^2 through an end (the integrals of the hat functions times 2 pi r)."""
+        scene = hc.flux_scene(2, 1.0, 0.0, steps=10)
+        scene["axisymmetric"] = True
+        scene["boundary_conditions"][0]["face"] = face
+        sim = hc.ExplicitMPM(hc.load_scene(scene))
+        for _ in range(10):
+            sim.advance(1e-3)
+        assert sim.thermal_series()["boundary_heat"] == pytest.approx(area * 0.01, rel=1e-12)
+
+
 class TestAxisymmetricConduction:
     """A tube wall r in [1, 2], held at 0 inside and 1 outside: steady T = ln(r)/ln 2.
     At t = 1 the slowest transient has decayed to exp(-pi^2) = 5e-5 of its start; with
