@@ -67,6 +67,12 @@ def test_k_processes_give_the_single_process_particles(name, processes, single, 
     for field in ("position", "velocity", "stress", "temperature", "heat_flux"):
         if field in want:   # the heat case's
             assert relative_difference(want[field], got[field]) <= TOLERANCE, field
+    for name in ("thermal_energy", "boundary_heat"):   # the heat case's: sums over processes
+        if name in reference_series:
+            assert reference_series[name][-1] > 0   # heat came in through the floor's face
+            series = read_series(tmp_path / "result.h5")
+            assert np.max(np.abs(series[name] - reference_series[name])) <= TOLERANCE * np.max(
+                np.abs(reference_series[name])), name
     reactions = sorted(n for n in reference_series if n.startswith("reaction_"))
     if reactions:
         series = read_series(tmp_path / "result.h5")
