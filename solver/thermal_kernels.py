@@ -163,6 +163,8 @@ def expand(stress, T, T_ref, alpha, bulk, total):
     moves T_ref on; a total one the whole change since the start."""
     rate = total.ndim == 1
     for p in range(stress.shape[0]):   # serial: cheaper than waking the threads
+        if T[p] == T_ref[p]:   # no thermal strain (a body the heat has not reached): stress untouched
+            continue
         s = 3.0 * bulk * alpha * (T[p] - T_ref[p])
         for a in range(3):
             stress[p, a, a] -= s
