@@ -77,6 +77,7 @@ class Restart:
     damping_work: float
     particles: dict[str, np.ndarray]
     series: dict[str, np.ndarray]
+    boundary_heat: float = 0.0   # heat in through heat_flux and convection faces (solver/thermal.py)
 
 
 def checkpoint_path(out_dir: str | os.PathLike) -> Path:
@@ -121,6 +122,7 @@ class Checkpointer:
         simulation since (frames and rows written after it are left out)."""
         dt, frame_next, frames_written, rows = self._mark
         particles = sim.domain.gather(sim.particles.arrays())   # all processes' particles, on rank 0
+        heat = sim.thermal_series()   # (collective: every process sums its boundary heat)
         self.last_step, self.last_time = sim.step_count, time.monotonic()
         if particles is None:
             return
@@ -130,7 +132,8 @@ class Checkpointer:
                 h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, scene=self.scene_json,
                                 step=sim.step_count, time=sim.time, dt=dt, frame_next=frame_next,
                                 frames_written=frames_written, external_work=sim.external_work,
-                                boundary_work=sim.boundary_work, damping_work=sim.damping_work)
+                                boundary_work=sim.boundary_work, damping_work=sim.damping_work,
+                                **({"boundary_heat": heat["boundary_heat"]} if heat else {}))
                 for name, array in particles.items():
                     h5.create_dataset(f"particles/{name}", data=array)
                 for name, values in self.writer.series().items():
@@ -187,7 +190,8 @@ def load(out_dir: Path, scene) -> Restart | None:
                       frame_next=int(attrs["frame_next"]), frames_written=int(attrs["frames_written"]),
                       external_work=float(attrs["external_work"]),
                       boundary_work=float(attrs["boundary_work"]),
-                      damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series)
+                      damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series,
+                      boundary_heat=float(attrs.get("boundary_heat", 0.0)))
     source = _result_to_continue(Path(out_dir))
     try:
         complete = len(list_frames(source)) if source else 0
@@ -231,6 +235,8 @@ def _restore(sim, restart: Restart) -> None:
     sim.time, sim.step_count = restart.time, restart.step
     sim.external_work, sim.boundary_work = restart.external_work, restart.boundary_work
     sim.damping_work = restart.damping_work
+    if sim.conduction is not None:   # the total, kept by one process (the series sums them)
+        sim.conduction.boundary_heat = restart.boundary_heat if sim.domain.is_root else 0.0
 
 
 def _set_aside_result(out_dir: Path) -> None:

@@ -56,6 +56,13 @@ def _state(name: str, absent: float):
     return field
 
 
+def _heat_flux(sim) -> np.ndarray:
+    """q_p = -k grad T (solver/thermal.py); zero where nothing conducts."""
+    p = sim.particles
+    q = p.extra.get("heat_flux")
+    return q if q is not None else np.zeros((p.count, p.dimension))
+
+
 FIELDS = {
     "position": lambda sim: sim.particles.x,
     "velocity": lambda sim: sim.particles.v,
@@ -69,6 +76,7 @@ FIELDS = {
     "velocity_magnitude": lambda sim: np.linalg.norm(sim.particles.v, axis=1),
     "deformation_gradient": lambda sim: sim.particles.F.reshape(sim.particles.count, -1),
     "strain_energy_density": _strain_energy_density,
+    "heat_flux": _heat_flux,
 }
 """The fields of every scene; the materials add their state's (plastic_strain, damage,
 temperature, internal_energy, ...: solver.materials.output_fields)."""

@@ -193,8 +193,8 @@ class _TimeLoop:
                                  strain_energy=e.strain, total_energy=e.total,
                                  external_work=e.external_work, boundary_work=e.boundary_work,
                                  **({"damping_work": e.damping_work} if sim.scene.damping else {}),
-                                 **sim.reactions())
-        supplied = self.initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0)
+                                 **sim.reactions(), **sim.thermal_series())
+        supplied = self.initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0) + e.thermal
         if not e.total <= ENERGY_GROWTH_LIMIT * supplied + self.energy_floor:
             raise Instability(sim.step_count, sim.time, None, "total energy",
                               f"{e.total:.6g} exceeds {ENERGY_GROWTH_LIMIT:g} x the energy supplied "

@@ -61,6 +61,7 @@ from solver.schema import (
     supported,
     scene_error,
 )
+from solver.thermal_schema import thermal_problems
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")
@@ -448,7 +449,52 @@ class WallCondition(SceneModel):
         return self
 
 
-BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition], Field(discriminator="type")]
+Face = Literal["x-", "x+", "y-", "y+", "z-", "z+"]
+
+
+class TemperatureCondition(SceneModel):
+    """The grid temperature held on a face or on the nodes inside a box ([R] Algorithm 8,
+    lines 10 and 14; solver/thermal.py)."""
+
+    type: Literal["temperature"]
+    face: Face | None = None
+    where: BoxGeometry | None = None
+    temperature: TimeValue
+
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
+
+    @model_validator(mode="after")
+    def _face_or_box(self) -> "TemperatureCondition":
+        if (self.face is None) == (self.where is None):
+            raise scene_error("give either face or where (a box of nodes)")
+        return self
+
+
+class HeatFluxCondition(SceneModel):
+    """A heat flux (W/m^2, positive into the body) through a face of the grid."""
+
+    type: Literal["heat_flux"]
+    face: Face
+    flux: TimeValue
+
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
+
+
+class ConvectionCondition(SceneModel):
+    """Heat exchanged with the surroundings through a face: q = coefficient (ambient - T)."""
+
+    type: Literal["convection"]
+    face: Face
+    coefficient: NonNegative   # W/(m^2 K)
+    ambient: Real              # K
+
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
+
+
+THERMAL_CONDITIONS = (TemperatureCondition, HeatFluxCondition, ConvectionCondition)
+
+BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition, TemperatureCondition, HeatFluxCondition,
+                                    ConvectionCondition], Field(discriminator="type")]
 
 
 # --------------------------------------------------------------------------- loads, damping
@@ -742,6 +788,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
                                     f"(parallel.processes = {scene.parallel.processes})"))
 
     problems += _condition_problems(scene, length_ok)
+    problems += thermal_problems(scene, THERMAL_CONDITIONS, length_ok)
     if grid_ok:
         problems += slab_problems(scene)
     return problems
@@ -757,7 +804,7 @@ def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
             length_ok(f"{path}.where.lower", condition.where.lower)
             length_ok(f"{path}.where.upper", condition.where.upper)
             length_ok(f"{path}.velocity", condition.velocity)
-        else:
+        elif isinstance(condition, WallCondition):
             axis = "xyz".index(condition.face[0])
             if axis >= scene.dimension:
                 problems.append((f"{path}.face", f"{condition.face!r} is not a face of a {scene.dimension}D grid"))

@@ -58,7 +58,16 @@ class SceneModel(BaseModel):
 
 class BaseMaterial(SceneModel):
     """A material entry of the scene. A subclass declares ``model: Literal["<name>"]``,
-    its keys, and the wave speed the time step estimate starts from."""
+    its keys, and the wave speed the time step estimate starts from.
+
+    Every material may carry the thermal keys (solver/thermal.py): conduction runs in
+    a material with thermal_conductivity > 0 (it needs specific_heat), and
+    thermal_expansion (1/K, linear) strains the solid models ([R] 5.26). Absent, a
+    scene allocates and runs nothing thermal."""
+
+    thermal_conductivity: NonNegative | None = None   # k, W/(m K); None or 0: no conduction in it
+    specific_heat: Positive | None = None              # c, J/(kg K)
+    thermal_expansion: Real | None = None              # alpha, 1/K; None or 0: no thermal strain
 
     @field_validator("model", check_fields=False)
     @classmethod
@@ -74,6 +83,10 @@ class BaseMaterial(SceneModel):
         """The wave speed in `body` (made of this material) at t = 0, for the summary's
         time step estimate; 0 where no wave travels."""
         return self.dilatational_wave_speed() or 0.0
+
+    @property
+    def conducts(self) -> bool:
+        return bool(self.thermal_conductivity)
 
 
 class ElasticMaterial(BaseMaterial):

@@ -13,13 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from solver import kernels, parallel, shape, step, threads
+from solver import kernels, parallel, shape, step, thermal, threads
 from solver.axisymmetric import Axisymmetry
 from solver.errors import SolverError
 from solver.loads import AppliedLoads, BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, material_slices
+from solver.thermal_schema import conducts, expands
 from solver.transfer import AffineTransfer
 
 # Nodes whose mass is below this fraction of the lightest particle's mass get no
@@ -47,6 +48,7 @@ class Energies:
     external_work: float
     boundary_work: float
     damping_work: float = 0.0   # work of the damping forces (<= 0), solver/damping.py
+    thermal: float = 0.0        # the most mechanical energy thermal expansion can have given (solver/thermal.py)
 
     @property
     def total(self) -> float:
@@ -67,6 +69,9 @@ class ExplicitMPM:
         # state started) once, here, and reused whatever particles a process holds later.
         self.materials = make_materials(scene, slices, self.particles)
         self._model_of = {name: model for name, (model, _) in zip(slices, self.materials)}
+        thermal.setup(scene, self.particles)   # nothing without thermal keys
+        self.conduction = thermal.Conduction(scene, self.particles) if conducts(scene) else None
+        self.expansion = thermal.ThermalExpansion(scene, self._model_of) if expands(scene) else None
         self.shape = shape.get(method.shape_function)
         self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
@@ -168,7 +173,10 @@ class ExplicitMPM:
     def stable_time_step(self, cfl: float) -> float:
         """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73), times the formulation's factor."""
         speed = self.domain.max(self.wave_speed) + self.domain.max(kernels.max_speed_per_axis(self.particles.v))
-        return float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300))) * self.formulation.time_step_factor(self)
+        dt = float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300))) * self.formulation.time_step_factor(self)
+        if self.conduction is not None:   # and the explicit conduction's limit rho c h^2 / (2 d k)
+            dt = min(dt, self.conduction.stable_time_step(cfl))
+        return dt
 
     def reactions(self) -> dict[str, float]:
         """The rigid bodies' reaction forces (mean since the last call), by series name."""
@@ -178,8 +186,17 @@ class ExplicitMPM:
         p = self.particles
         strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
         local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work,
-                 self.damping_work]
+                 self.damping_work, self.expansion.energy_bound(self) if self.expansion is not None else 0.0]
         return Energies(*(float(e) for e in self.domain.sum(local)))
+
+    def thermal_series(self) -> dict[str, float]:
+        """thermal_energy (sum m c T) and the heat that came in through heat_flux and
+        convection faces, for a scene with conduction; nothing otherwise."""
+        if self.conduction is None:
+            return {}
+        local = [self.conduction.thermal_energy(self.particles), self.conduction.boundary_heat]
+        energy, heat_in = (float(e) for e in self.domain.sum(local))
+        return {"thermal_energy": energy, "boundary_heat": heat_in}
 
     def check_finite(self) -> None:
         p = self.particles

@@ -17,6 +17,7 @@ from solver import shape as shape_functions
 from solver.expressions import compile_expression
 from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, Scene
 from solver.seeding import count_particles
+from solver.thermal_schema import conduction_time_step
 
 # Assumed solver throughput in particle-steps per second (one process): a rough
 # figure for the order of magnitude of the run time, not a measurement.
@@ -58,13 +59,14 @@ def summarize(scene: Scene) -> Summary:
 
 def time_step(scene: Scene) -> float:
     """The fixed dt, or cfl * min(h) / max over bodies (wave speed + largest initial
-    speed) for an adaptive run. Where nothing moves or carries waves, end."""
+    speed) for an adaptive run, and at most cfl times the conduction limit where heat
+    conducts (solver/thermal_schema.py). Where nothing moves, carries waves or conducts, end."""
     if scene.time.dt is not None:
         return scene.time.dt
     fastest = max(_wave_speed(scene, body) + _largest_speed(scene, body) for body in scene.bodies)
-    if fastest <= 0:
-        return scene.time.end
-    return scene.time.cfl * min(scene.cell_sizes()) / fastest
+    dt = scene.time.end if fastest <= 0 else scene.time.cfl * min(scene.cell_sizes()) / fastest
+    conduction = conduction_time_step(scene)
+    return dt if conduction is None else min(dt, scene.time.cfl * conduction[0])
 
 
 def estimate_steps(scene: Scene) -> int:

@@ -92,9 +92,14 @@ class SlabDomain:
                     force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)))
 
     def constraints(self, scene, grid: Grid) -> "_OwnedConstraints":
-        whole = grid_geometry(scene)
-        return _OwnedConstraints(Constraints(scene, whole), whole, owned_nodes(self.cuts, self.rank),
-                                 self.local[0], self.axis, grid.strides)
+        return self.owned(Constraints(scene, grid_geometry(scene)), grid)
+
+    def owned(self, whole, grid: Grid) -> "_OwnedConstraints":
+        """Nodal conditions of the whole grid (node, axis, value, set_time) on the nodes this
+        process owns, in local numbers."""
+        numbering = SimpleNamespace(node_counts=self.cells + 1, strides=self._whole_strides)
+        return _OwnedConstraints(whole, numbering, owned_nodes(self.cuts, self.rank), self.local[0], self.axis,
+                                 grid.strides)
 
     def weights(self, module, spec, x, particles, grid: Grid, stencil) -> int:
         """Shape functions at the particles, numbered on the local grid.

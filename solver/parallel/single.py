@@ -28,6 +28,10 @@ class SingleProcess:
     def constraints(self, scene, grid):
         return Constraints(scene, grid)
 
+    def owned(self, whole, grid):
+        """Nodal conditions of the whole grid (node, axis, value) on this process's nodes: all of them."""
+        return whole
+
     def weights(self, module, spec, x, particles, grid, stencil) -> int:
         return shape.evaluate(module, spec, x, particles, grid, stencil)
 

@@ -19,9 +19,10 @@ calls the method of every hook that has one, in the order the hooks were made
 The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_step),
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `damping`
-(before_update, its work at after_g2p: solver/damping.py).
+(before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
+after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress).
 
-A hook that needs the stored stencil (the hoop terms) runs with the general kernels
+A hook that needs the stored stencil (the hoop terms, conduction) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
 shares are not hooks: they complete each grid phase, after every hook of the point
 has added its part (solver/step/phases.py).
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 from solver import kernels
 from solver.damping import Damping
+from solver.thermal import make_conduction, make_expansion
 
 POINTS = ("begin_step", "after_forces", "before_update", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
 
@@ -102,7 +104,8 @@ def _damping(sim):
 # compose in: rigid bodies impose before the boundary conditions, which win where both
 # apply; the loads' work is counted after the rigid bodies moved; damping acts on the
 # forces of every other hook.
-HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping]
+HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping, make_conduction,
+         make_expansion]
 
 
 def scene_hooks(sim) -> Hooks:

@@ -39,6 +39,25 @@ SCENE_2D = {
     "parallel": {"processes": 1, "rebalance_every": 20},
 }
 
+# SCENE_2D with heat: the disks start at 400 and 300 K, conduct and expand, a box of nodes
+# across the slab cuts is held at a rising temperature, and a floor slab across every
+# slab takes a heat flux and convection through the face y- (solver/thermal.py).
+HEAT_2D = {
+    **copy.deepcopy(SCENE_2D), "name": "equivalence-heat",
+    "materials": {"rubber": {**ELASTIC, "thermal_conductivity": 1.0e4, "specific_heat": 1000.0,
+                             "thermal_expansion": 1.0e-3}},
+    "output": {"frames": 2, "fields": ["position", "velocity", "stress", "temperature", "heat_flux"], "energies": 10},
+}
+HEAT_2D["bodies"][0]["initial_temperature"] = 400.0
+HEAT_2D["bodies"][1]["initial_temperature"] = 300.0
+HEAT_2D["bodies"].append({"name": "floor", "material": "rubber", "particles_per_cell": 2,
+                          "geometry": {"type": "box", "lower": [0.04, 0.0], "upper": [0.96, 0.06]}})
+HEAT_2D["boundary_conditions"] = SCENE_2D["boundary_conditions"] + [
+    {"type": "temperature", "where": {"type": "box", "lower": [0.3, 0.2], "upper": [0.7, 0.24]},
+     "temperature": "350 + 100 * t"},
+    {"type": "heat_flux", "face": "y-", "flux": "1e5 * t"},
+    {"type": "convection", "face": "y-", "coefficient": 100.0, "ambient": 250.0}]
+
 # The same in 3D: two spheres on a 25 x 10 x 10 grid (about 1100 particles).
 SCENE_3D = {
     **copy.deepcopy(SCENE_2D), "name": "equivalence-3d", "dimension": 3,

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ranks import (AXISYMMETRIC, RIGID_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference,
+from ranks import (AXISYMMETRIC, HEAT_2D, RIGID_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference,
                    run_cli, run_mpiexec, scene)
 
 from solver.results import read_series
@@ -29,9 +29,11 @@ CASES = {
     "rigid": scene(RIGID_2D),
     "axisymmetric": scene(AXISYMMETRIC),
     "tlmpm": scene(TLMPM_2D),
+    "heat": scene(HEAT_2D),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
-        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3)]
+        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
+        ("heat", 2), ("heat", 3)]
 
 
 @pytest.fixture(scope="module")
@@ -62,8 +64,15 @@ def test_k_processes_give_the_single_process_particles(name, processes, single, 
     got, want = frame["fields"], reference["fields"]
     assert np.array_equal(got["id"], want["id"]) and np.array_equal(got["body"], want["body"])
     assert np.max(np.abs(want["stress"])) > 0   # the bodies did collide
-    for field in ("position", "velocity", "stress"):
-        assert relative_difference(want[field], got[field]) <= TOLERANCE, field
+    for field in ("position", "velocity", "stress", "temperature", "heat_flux"):
+        if field in want:   # the heat case's
+            assert relative_difference(want[field], got[field]) <= TOLERANCE, field
+    for name in ("thermal_energy", "boundary_heat"):   # the heat case's: sums over processes
+        if name in reference_series:
+            assert reference_series[name][-1] > 0   # heat came in through the floor's face
+            series = read_series(tmp_path / "result.h5")
+            assert np.max(np.abs(series[name] - reference_series[name])) <= TOLERANCE * np.max(
+                np.abs(reference_series[name])), name
     reactions = sorted(n for n in reference_series if n.startswith("reaction_"))
     if reactions:
         series = read_series(tmp_path / "result.h5")

@@ -200,3 +200,21 @@ def test_the_checkpoint_replaces_the_previous_one_atomically(tmp_path, monkeypat
     saves = [pair for pair in replaced if pair[1] == CHECKPOINT_FILE]
     assert len(saves) == 3  # steps 40 and 80, and where it stopped
     assert all(src.startswith(".") and src.endswith(".tmp") for src, _ in saves)
+
+
+def test_a_conducting_run_resumes_to_the_same_temperatures_and_boundary_heat(tmp_path, monkeypatch):
+    """The thermal state (temperature, heat flux, the heat that came in) is carried."""
+    scene = column()
+    scene["materials"]["m"].update(thermal_conductivity=50.0, specific_heat=100.0, thermal_expansion=1e-4)
+    scene["boundary_conditions"] += [{"type": "heat_flux", "face": "y-", "flux": 1.0e3},
+                                     {"type": "temperature", "where": {"type": "box", "lower": [0.0, 0.25],
+                                                                       "upper": [0.6, 0.6]},
+                                      "temperature": "300 + 100 * t"}]
+    scene["output"]["fields"] += ["temperature", "heat_flux"]
+    reference = run(scene, tmp_path / "reference")
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
+    assert stopped.status == "partial"
+    resumed = run(scene, tmp_path / "resumed", resume=True)
+    assert resumed.steps == reference.steps
+    assert_same_result(reference.result_path, resumed.result_path)

@@ -22,6 +22,7 @@ from solver.results import read_frame, read_series
 from solver.scene import Scene, SceneError, load_scene
 from solver.schema import BaseMaterial, ElasticMaterial, Positive
 from solver.summary import summarize
+from solver.thermal_schema import THERMAL_KEYS
 
 DOCS = Path(__file__).parents[2] / "docs" / "scene.md"
 
@@ -228,8 +229,16 @@ class TestDocumentation:
             keys = set(material.schema.model_fields) - {"model"}
             if "the elastic keys" in rows[name][0]:
                 keys -= elastic
+            keys -= set(THERMAL_KEYS)   # every material's: documented once, in the heat section
             documented = set(re.findall(r"`(\w+)`", rows[name][0]))
             assert keys <= documented, f"{name}: {sorted(keys - documented)} not in docs/scene.md"
+
+    def test_the_thermal_keys_every_material_takes_are_documented(self):
+        text = DOCS.read_text(encoding="utf-8")
+        heat = text[text.index("## Heat"):].split("\n## ", 1)[0]
+        assert set(THERMAL_KEYS) <= set(BaseMaterial.model_fields)
+        for key in THERMAL_KEYS:
+            assert f"`{key}`" in heat, f"{key} not in the heat section of docs/scene.md"
 
     def test_every_shape_function_is_in_the_table_with_its_support(self):
         rows = self.table_rows("| name | nodes per axis | what | grid ends |")

@@ -186,6 +186,8 @@ def _energy(stress, mass, volume, dmg, G, rho0, eos_prm, out):
 
 
 class JohnsonCook(IsotropicElastic):
+    total_stress = True   # the EOS gives the whole pressure each step: 3 K0 alpha (T - T0) off it
+
     def __init__(self, config, dimension: int):
         super().__init__(config, dimension)
         self.config = config
@@ -198,6 +200,10 @@ class JohnsonCook(IsotropicElastic):
         self.failure = damage_model.failure_parameters(config.failure)
         self.reference_wave_speed = math.sqrt((self.bulk + 4.0 / 3.0 * self.mu) / self.density)
         self.wave_speed = self.reference_wave_speed
+
+    @property
+    def thermal_bulk_modulus(self) -> float:
+        return self.bulk
 
     def _optional(self, particles, name: str, sl: slice) -> np.ndarray:
         return particles.extra[name][sl] if name in particles.extra else np.zeros(0)

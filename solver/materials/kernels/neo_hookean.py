@@ -46,6 +46,7 @@ def _energy(F, volume0, lam, mu, out):
 
 
 class NeoHookean(IsotropicElastic):
+    total_stress = True   # sigma(F) each step: the thermal pressure 3 K alpha (T - T0), linearised
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.F[sl], particles.stress[sl], self.lam, self.mu)
 

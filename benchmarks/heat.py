@@ -1,0 +1,162 @@
+"""Heat: the cost of conduction in a step, and the errors and times of the heat
+verification cases (the "Heat" section of docs/benchmarks.md).
+
+    python benchmarks/heat.py [--steps 20] [--repeats 5] [--skip-cases]
+
+Cost: one 2D and one 3D scene (an elastic block, MUSL, linear hats, 58k and 111k
+particles), stepped with and without heat (conduction, a held face, expansion; the
+same scene without the thermal keys) in the same process, interleaved, best of
+`repeats` runs of `steps` steps each. Conduction reads the general backend's stored
+stencil, so a conducting scene steps with it: the ratio to the same scene on the
+general backend is the cost of the thermal phases; the ratio to the fused backend
+(where the scene without heat runs) is what a user sees.
+
+Cases: tests/verification/heat_cases.py (E12 with refinement and [R]'s dt = 8e-5,
+E13, the boundary heat balance, the axisymmetric tube, thermal expansion).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "verification"))
+
+import numpy as np  # noqa: E402
+
+import heat_cases as hc  # noqa: E402
+
+from solver.scene import load_scene  # noqa: E402
+from solver.stepper import ExplicitMPM  # noqa: E402
+
+THERMAL = {"thermal_conductivity": 50.0, "specific_heat": 500.0, "thermal_expansion": 1.0e-5}
+
+
+def block(dim: int, cell: float, heat: bool, threads: int = 0) -> dict:
+    material = {"model": "linear_elastic", "density": 8000.0, "youngs_modulus": 2.0e11, "poisson_ratio": 0.3}
+    if heat:
+        material.update(THERMAL)
+    return {"dimension": dim, "method": {"scheme": "musl"},
+            "grid": {"lower": [0.0] * dim, "upper": [1.0] * dim, "cell_size": cell},
+            "materials": {"steel": material},
+            "bodies": [{"name": "block", "material": "steel", "initial_velocity": [1.0] + [0.0] * (dim - 1),
+                        "geometry": {"type": "box", "lower": [0.2] * dim, "upper": [0.8] * dim},
+                        "initial_temperature": 300.0}],
+            "boundary_conditions": [{"type": "temperature", "face": "x-", "temperature": 400.0}] if heat else [],
+            "time": {"end": 1.0}, "parallel": {"threads": threads}}
+
+
+def seconds_per_step(sim: ExplicitMPM, steps: int) -> float:
+    dt = 0.1 * sim.stable_time_step(0.5)
+    start = time.perf_counter()
+    for _ in range(steps):
+        sim.advance(dt)
+    return (time.perf_counter() - start) / steps
+
+
+def step_costs(dim: int, cell: float, steps: int, repeats: int, threads: int):
+    sims = {"fused, no heat": ExplicitMPM(load_scene(block(dim, cell, False, threads))),
+            "general, no heat": ExplicitMPM(load_scene(block(dim, cell, False, threads)), general=True),
+            "conduction + expansion": ExplicitMPM(load_scene(block(dim, cell, True, threads)))}
+    for sim in sims.values():   # compile
+        seconds_per_step(sim, 2)
+    times = {name: [] for name in sims}
+    for _ in range(repeats):   # interleaved: the machine's load falls on all alike
+        for name, sim in sims.items():
+            times[name].append(seconds_per_step(sim, steps))
+    return times, sims["fused, no heat"].particles.count
+
+
+def _ratio(times, heat: str, base: str) -> str:
+    """best over best, and the spread of the per-repeat ratios"""
+    ratios = [h / b for h, b in zip(times[heat], times[base])]
+    return f"{min(times[heat]) / min(times[base]):.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
+
+
+def cost_table(steps: int, repeats: int, threads: int) -> None:
+    print(f"threads: {threads or 'default'}; ms per step, best of {repeats} x {steps} steps; ratios: best over "
+          "best (spread of the per-repeat ratios)")
+    print("| scene | particles | no heat, fused | no heat, general | heat (general) | "
+          "heat / no heat, general | heat / no heat, fused |")
+    print("|---|---|---|---|---|---|---|")
+    for dim, cell in ((2, 0.005), (3, 0.025)):
+        times, particles = step_costs(dim, cell, steps, repeats, threads)
+        best = {name: 1e3 * min(t) for name, t in times.items()}
+        print(f"| {dim}D block, MUSL, linear | {particles} | {best['fused, no heat']:.1f} | "
+              f"{best['general, no heat']:.1f} | {best['conduction + expansion']:.1f} | "
+              f"{_ratio(times, 'conduction + expansion', 'general, no heat')} | "
+              f"{_ratio(times, 'conduction + expansion', 'fused, no heat')} |")
+
+
+def timed(function, *args, **kwargs):
+    start = time.perf_counter()
+    value = function(*args, **kwargs)
+    return value, time.perf_counter() - start
+
+
+def case_table() -> None:
+    print("| case | measure | value | wall (s) |")
+    print("|---|---|---|---|")
+    previous = None
+    for cells in (25, 50, 100):
+        h = 1.0 / cells
+        errors, wall = timed(hc.bar_errors, cells, 0.5 * h * h / 2)
+        worst = max(e[0] for e in errors.values())
+        order = "" if previous is None else f", order {math.log2(previous / worst):.2f}"
+        print(f"| E12, {cells} cells, dt = h^2/4 | max nodal error over t = 0.0075, 0.03, 0.05 | "
+              f"{worst:.2e}{order} | {wall:.2f} |")
+        previous = worst
+    for dt in (5e-5, 8e-5):
+        sim = ExplicitMPM(load_scene(hc.bar_scene(100, 5e-5)))
+        start = time.perf_counter()
+        hc.advance_to(sim, 0.05, dt)
+        wall = time.perf_counter() - start
+        nodes = sim.grid.node_positions()[:, 0]
+        grid = np.max(np.abs(sim.conduction.grid_temperature() - hc.bar_exact(nodes, sim.time)))
+        p = sim.particles
+        particles = np.max(np.abs(p.extra["temperature"] - hc.bar_exact(p.x[:, 0], sim.time)))
+        print(f"| E12, 100 cells, dt = {dt:g} ([R]; errata F7) | max error at t = 0.05, grid / particles | "
+              f"{grid:.2e} / {particles:.2e} | {wall:.2f} |")
+    previous = None
+    for cells, dt in ((10, 1e-4), (20, 1e-4), (40, 2.5e-5)):
+        error, wall = timed(hc.plate_error, cells, dt)
+        order = "" if previous is None else f", order {math.log2(previous / error):.2f}"
+        print(f"| E13, {cells} x {cells} cells, dt = {dt:g} | max nodal error at t = 0.05 (K, of 100) | "
+              f"{error:.3f}{order} | {wall:.2f} |")
+        previous = error
+    for dim in (1, 2, 3):
+        (gain, heat_in), wall = timed(hc.flux_balance, dim)
+        print(f"| heat flux + convection, {dim}D, 200 steps | abs(gain of sum m c T - heat in) / heat in | "
+              f"{abs(gain - heat_in) / heat_in:.1e} | {wall:.2f} |")
+    for axisymmetric in (True, False):
+        error, wall = timed(hc.tube_error, axisymmetric)
+        kind = "axisymmetric" if axisymmetric else "plane (no radial term)"
+        print(f"| tube r in [1, 2], {kind}, t = 1 | max nodal distance from ln(r)/ln 2 | {error:.1e} | {wall:.2f} |")
+    for model in hc.SOLIDS:
+        sim, wall = timed(hc.heated_bar, model, True)
+        stress = np.max(np.abs(sim.particles.stress[:, 0, 0] / (-hc.E * hc.ALPHA * hc.HEATING) - 1))
+        sim_free, wall_free = timed(hc.heated_bar, model, False)
+        strain = abs((sim_free.particles.F[:, 0, 0].mean() - 1) / (hc.ALPHA * hc.HEATING) - 1)
+        print(f"| heated bar, {model} | clamped: max rel. error of -E alpha dT; free: of alpha dT | "
+              f"{stress:.1e}; {strain:.1e} | {wall + wall_free:.2f} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=int, default=20)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--threads", type=int, default=0, help="0: the default count")
+    parser.add_argument("--skip-cases", action="store_true")
+    args = parser.parse_args()
+    cost_table(args.steps, args.repeats, args.threads)
+    if not args.skip_cases:
+        print()
+        case_table()
+
+
+if __name__ == "__main__":
+    main()

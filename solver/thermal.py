@@ -1,0 +1,309 @@
+"""Heat: explicit conduction on the step's grid ([R] 5.3, Algorithms 8 and 9), the
+thermal boundary conditions, and thermal expansion of the solid models ([R] 5.26).
+
+Conduction is a hook (solver/step/hooks.py) with a second field transferred through
+the same phases, on the same stencil and time step as the mechanics (Algorithm 9):
+
+| point         | Algorithm 8 lines | what                                                          |
+|---------------|-------------------|---------------------------------------------------------------|
+| begin_step    |                   | the temperature conditions' values at t and t + dt            |
+| after_forces  | 3-7               | C_I, (C T)_I, Q_I^int by P2G; ghost sums                       |
+| before_update | 9-10              | T_I^t, boundary heat (flux, convection), T~_I^{t+dt}, T*; halo |
+| after_g2p     | 12-15             | T_p, the remapped T_I^{t+dt} (ghost sums, T*, halo), q_p       |
+
+The flux q_p comes from the remapped grid temperature (line 13), as [R] insists.
+The heat of plastic work (Johnson-Cook's Taylor-Quinney term) is added to T_p by the
+material's stress update; the next P2G carries it to the grid, which is the source
+term Q^ext = sum_p V_p gamma* phi_I of line 5 (m c dT_p = V gamma* dt). With the
+axisymmetric ring weighting of masses and volumes, the weak form's sum V_p q_p .
+grad phi_I is the axisymmetric conduction operator, the radial term included.
+
+Conduction needs the stored stencil (the general backend: fused.supports refuses a
+conducting scene). Per-particle state lives in Particles.extra so that migration
+and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from solver import kernels, thermal_kernels
+from solver.expressions import compile_expression
+from solver.state import grid_geometry
+from solver.thermal_schema import conducts, conduction_time_step, expands
+
+DEFAULT_TEMPERATURE = 293.15   # K: a body's temperature when neither it nor its material gives one
+CAPACITY_CUTOFF_FRACTION = 1e-9   # nodes below this share of the smallest particle's m c hold no temperature
+
+
+def initial_temperatures(scene, body: np.ndarray) -> np.ndarray:
+    """Each particle's start temperature: its body's, else its material's room_temperature, else 293.15 K."""
+    per_body = []
+    for b in scene.bodies:
+        material = scene.materials[b.material]
+        default = getattr(material, "room_temperature", DEFAULT_TEMPERATURE)
+        per_body.append(default if b.initial_temperature is None else b.initial_temperature)
+    return np.array(per_body, dtype=np.float64)[body]
+
+
+def _per_particle(scene, body: np.ndarray, value) -> np.ndarray:
+    per_body = [value(scene.materials[b.material]) or 0.0 for b in scene.bodies]
+    return np.ascontiguousarray(np.array(per_body, dtype=np.float64)[body])
+
+
+def init_particles(scene, particles) -> None:
+    """The thermal state, where the scene has conduction or expansion: the temperature
+    (NaN left by a model that tracks none is set from the bodies), and for conduction
+    the per-particle c, k and q."""
+    start = initial_temperatures(scene, particles.body)
+    T = particles.require("temperature", fill=math.nan)
+    T[np.isnan(T)] = start[np.isnan(T)]
+    if conducts(scene):
+        particles.extra["heat_capacity"] = _per_particle(scene, particles.body, lambda m: m.specific_heat)
+        particles.extra["conductivity"] = _per_particle(scene, particles.body, lambda m: m.thermal_conductivity)
+        particles.require("heat_flux", (particles.dimension,))
+    if expands(scene):
+        particles.extra["expansion_temperature"] = T.copy()   # T the stress last took in (rate models)
+        particles.extra["start_temperature"] = T.copy()
+
+
+def setup(scene, particles) -> None:
+    """Thermal state for a scene that needs it; nothing at all for one without thermal keys."""
+    if conducts(scene) or expands(scene):
+        init_particles(scene, particles)
+
+
+# --------------------------------------------------------------------------- boundary conditions
+
+def _face_nodes(grid, face: str) -> tuple[np.ndarray, int]:
+    axis = "xyz".index(face[0])
+    layer = 0 if face[1] == "-" else int(grid.cells[axis])
+    index = np.arange(grid.n_nodes)
+    return np.flatnonzero((index // grid.strides[axis]) % (grid.cells[axis] + 1) == layer), axis
+
+
+def _tributary(grid, nodes: np.ndarray, axis: int, axisymmetric: bool) -> np.ndarray:
+    """The face area each node of a face stands for: the integral of its hat function
+    over the face (per unit depth in 2D, 1 in 1D; the ring area 2 pi int N r dr along r
+    in an axisymmetric scene)."""
+    area = np.ones(nodes.size)
+    for b in range(len(grid.h)):
+        layer = (nodes // grid.strides[b]) % (grid.cells[b] + 1)
+        h = grid.h[b]
+        if b == axis:
+            if axisymmetric and b == 0:   # the face r = const: its ring
+                area *= 2 * math.pi * (grid.lower[0] + layer * h)
+            continue
+        end = (layer == 0) | (layer == grid.cells[b])
+        if axisymmetric and b == 0:
+            r = grid.lower[0] + layer * h
+            share = np.where(layer == 0, r * h / 2 + h * h / 6,
+                             np.where(layer == grid.cells[b], r * h / 2 - h * h / 6, r * h))
+            area *= 2 * math.pi * share
+        else:
+            area *= np.where(end, h / 2, h)
+    return area
+
+
+class _NodeValues:
+    """Whole-grid nodes with one value each (and a condition index as `axis`), in the form
+    the processes' domain maps to the nodes a process owns (domain.owned)."""
+
+    def __init__(self, node, axis, value, expressions=()):
+        self.node = np.ascontiguousarray(node, dtype=np.int64)
+        self.axis = np.ascontiguousarray(axis, dtype=np.int64)
+        self.value = np.ascontiguousarray(value, dtype=np.float64)
+        self._expressions = list(expressions)   # (slice of value, compiled expression in t)
+        self.time_dependent = bool(self._expressions)
+
+    def set_time(self, t: float) -> None:
+        for sl, expression in self._expressions:
+            self.value[sl] = float(expression.evaluate(t=t))
+
+
+def _value(spec):
+    """(number, None) or (0, compiled expression in t)."""
+    return (0.0, compile_expression(spec, ("t",))) if isinstance(spec, str) else (float(spec), None)
+
+
+def held_temperatures(scene, grid) -> _NodeValues:
+    """The `temperature` conditions' nodes of the whole grid and their values."""
+    nodes, values, expressions, start = [], [], [], 0
+    positions = None
+    for bc in scene.boundary_conditions:
+        if bc.type != "temperature":
+            continue
+        if bc.face is not None:
+            sel, _ = _face_nodes(grid, bc.face)
+        else:
+            positions = grid.node_positions() if positions is None else positions
+            tol = 1e-9 * float(np.min(grid.h))
+            inside = np.all((positions >= np.asarray(bc.where.lower) - tol)
+                            & (positions <= np.asarray(bc.where.upper) + tol), axis=1)
+            sel = np.flatnonzero(inside)
+        number, expression = _value(bc.temperature)
+        nodes.append(sel)
+        values.append(np.full(sel.size, number))
+        if expression is not None:
+            expressions.append((slice(start, start + sel.size), expression))
+        start += sel.size
+    node = np.concatenate(nodes) if nodes else np.zeros(0, np.int64)
+    value = np.concatenate(values) if values else np.zeros(0)
+    return _NodeValues(node, np.zeros(node.size), value, expressions)
+
+
+class FaceHeat:
+    """heat_flux and convection conditions: each face node's area and its condition's q*, h, T_amb."""
+
+    def __init__(self, scene, grid):
+        nodes, areas, which = [], [], []
+        flux, coefficient, ambient, self._flux_expressions = [], [], [], []
+        for bc in scene.boundary_conditions:
+            if bc.type not in ("heat_flux", "convection"):
+                continue
+            sel, axis = _face_nodes(grid, bc.face)
+            c = len(flux)
+            nodes.append(sel)
+            areas.append(_tributary(grid, sel, axis, scene.axisymmetric))
+            which.append(np.full(sel.size, c))
+            number, expression = _value(bc.flux) if bc.type == "heat_flux" else (0.0, None)
+            if expression is not None:
+                self._flux_expressions.append((c, expression))
+            flux.append(number)
+            coefficient.append(bc.coefficient if bc.type == "convection" else 0.0)
+            ambient.append(bc.ambient if bc.type == "convection" else 0.0)
+        node = np.concatenate(nodes) if nodes else np.zeros(0, np.int64)
+        self.whole = _NodeValues(node, np.concatenate(which) if which else np.zeros(0),
+                                 np.concatenate(areas) if areas else np.zeros(0))
+        self.flux = np.array(flux, dtype=np.float64)
+        self.coefficient = np.array(coefficient, dtype=np.float64)
+        self.ambient = np.array(ambient, dtype=np.float64)
+
+    def set_time(self, t: float) -> None:
+        for c, expression in self._flux_expressions:
+            self.flux[c] = float(expression.evaluate(t=t))
+
+
+# --------------------------------------------------------------------------- conduction
+
+class Conduction:
+    """[R] Algorithm 8 as a hook of the step (the table in the module docstring)."""
+
+    def __init__(self, scene, particles):
+        self.scene = scene
+        p = particles
+        mc = p.mass * p.extra["heat_capacity"]
+        self.cutoff = CAPACITY_CUTOFF_FRACTION * float(mc[mc > 0].min()) if np.any(mc > 0) else 0.0
+        self.boundary_heat = 0.0   # heat that entered through heat_flux and convection faces (J)
+        whole = grid_geometry(scene)
+        self._held_whole = held_temperatures(scene, whole)
+        self._faces = FaceHeat(scene, whole)
+
+    def place(self, sim) -> "Conduction":
+        """Nodal arrays for this process's grid; the conditions on the nodes it owns."""
+        n = sim.grid.n_nodes
+        self.heat = np.zeros((n, 3))
+        self.T_old, self.T_new, self.remapped = np.zeros(n), np.zeros(n), np.zeros(n)
+        self.copies_heat = np.zeros((sim.threads - 1, n, 3))
+        self.copies_remapped = np.zeros((sim.threads - 1, n))
+        self.held = sim.domain.owned(self._held_whole, sim.grid)
+        self.faces = sim.domain.owned(self._faces.whole, sim.grid)
+        self.T_now = self.held.value.copy()   # T* at t; held.value is T* at t + dt
+        return self
+
+    def begin_step(self, sim, t_end: float) -> None:
+        if self.held.time_dependent:
+            self.held.set_time(sim.time)
+            self.T_now[:] = self.held.value
+            self.held.set_time(t_end)
+        self._faces.set_time(sim.time)
+
+    def after_forces(self, sim) -> None:
+        p, s = sim.particles, sim.stencil
+        x = p.extra
+        self.heat.fill(0.0)
+        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], p.volume,
+                            x["heat_flux"], self.heat, self.copies_heat)
+        sim.domain.sum_ghosts(self.heat)
+
+    def before_update(self, sim, dt: float) -> None:
+        faces = self._faces
+        rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
+                                             faces.ambient, self.faces.axis, self.heat, self.cutoff)
+        self.boundary_heat += dt * rate
+        thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new)
+        thermal_kernels.hold(self.held.node, self.T_now, self.T_old)
+        thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
+        sim.domain.share_nodes(self.T_old, self.T_new)
+
+    def after_g2p(self, sim, dt: float) -> None:
+        p, s = sim.particles, sim.stencil
+        x = p.extra
+        self.remapped.fill(0.0)
+        thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
+                                  x["temperature"], self.remapped, self.copies_remapped)
+        sim.domain.sum_ghosts(self.remapped)
+        thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new)
+        thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
+        sim.domain.share_nodes(self.T_new)
+        thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
+                                      sim.threads)
+
+    def grid_temperature(self) -> np.ndarray:
+        """T_I^{t+dt} of the last step (the remapped, smooth one [R] plots), on this process's nodes."""
+        return self.T_new
+
+    def thermal_energy(self, particles) -> float:
+        x = particles.extra
+        return float(thermal_kernels.thermal_energy(particles.mass, x["heat_capacity"], x["temperature"]))
+
+    def stable_time_step(self, cfl: float) -> float:
+        return cfl * conduction_time_step(self.scene)[0]
+
+
+# --------------------------------------------------------------------------- thermal expansion
+
+class ThermalExpansion:
+    """After the materials' stress update, the stress of the thermal strain alpha dT I
+    (thermal_kernels.expand): rate models (hypoelastic, J2) take each step's increment
+    of T, total ones (neo-Hookean, Johnson-Cook's EOS pressure) the change since the start."""
+
+    def __init__(self, scene, model_of: dict):
+        # solver model -> alpha, for the expanding materials
+        self.alpha_of_model = {model: float(scene.materials[name].thermal_expansion)
+                               for name, model in model_of.items() if scene.materials[name].thermal_expansion}
+
+    def after_stress(self, sim, dt: float) -> None:
+        x = sim.particles.extra
+        for model, sl in sim.materials:   # the slices of the particles held now
+            alpha = self.alpha_of_model.get(model)
+            if alpha:
+                thermal_kernels.expand(sim.particles.stress[sl], x["temperature"][sl],
+                                       x["expansion_temperature"][sl], alpha, model.thermal_bulk_modulus,
+                                       kernels.flag(model.total_stress))
+
+    def energy_bound(self, sim) -> float:
+        """sum_p V_p 9/2 K alpha^2 (T_p - T0_p)^2: the strain energy of the thermal strain
+        held fully (a clamped body), the most heating can give the mechanics at once (a
+        free body heated suddenly turns it into motion). The runner counts it as supplied."""
+        p, x = sim.particles, sim.particles.extra
+        total = 0.0
+        for model, sl in sim.materials:
+            alpha = self.alpha_of_model.get(model)
+            if alpha:
+                rise = x["temperature"][sl] - x["start_temperature"][sl]
+                total += 4.5 * model.thermal_bulk_modulus * alpha**2 * float(np.dot(p.volume[sl], rise * rise))
+        return total
+
+
+def make_conduction(sim):
+    """The conduction hook of a scene with conduction (placed on the current grid), else None."""
+    if sim.conduction is None:
+        return None
+    return sim.conduction.place(sim)
+
+
+def make_expansion(sim):
+    """The thermal expansion hook of a scene with a thermal_expansion coefficient, else None."""
+    return sim.expansion
