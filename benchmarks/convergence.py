@@ -83,7 +83,7 @@ def methods(quick: bool) -> list[Options]:
     out = []
     for formulation in ("ulmpm", "tlmpm"):
         for shape in QUICK_SHAPES if quick else SHAPES:
-            for transfer in ("flip",) if quick else ("flip", "apic"):
+            for transfer in ("flip",) if quick else ("flip", "apic", "mls"):
                 out.append(Options(formulation=formulation, shape=shape, transfer=transfer))
     return out
 

@@ -70,10 +70,11 @@ FRAMEWORKS = Path(__file__).resolve().parent / "frameworks"
 MLS_DT = 1e-5
 
 
-def mls_block_scene(dim: int, cells: int, threads: int) -> dict:
-    """The block of the side-by-side comparison: the step every implementation runs."""
+def mls_block_scene(dim: int, cells: int, threads: int, transfer: str = "apic") -> dict:
+    """The block of the side-by-side comparison: the step every implementation runs
+    (the solver's with APIC, and with MLS: the frameworks' and the reference's transfer)."""
     scene = block_scene(dim, cells)
-    scene["method"] = {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": "apic"}
+    scene["method"] = {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": transfer}
     scene["materials"]["m"]["model"] = "neo_hookean"
     scene["time"]["dt"] = MLS_DT
     scene["parallel"] = {"threads": threads}
@@ -96,6 +97,7 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
     import numba
 
     sim = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
+    mls = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads, "mls")))
     general = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
     general.use_general_kernels()
     p = sim.particles
@@ -103,7 +105,7 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
     model = sim.materials[0][0]
     reference = ReferenceMLS(p.x, p.v, p.mass, p.volume, cells, model.lam, model.mu, threads)
     n = p.count
-    contenders = {"solver": sim, "general": general, "numba": reference}
+    contenders = {"solver": sim, "mls": mls, "general": general, "numba": reference}
     best = {name: 0.0 for name in contenders}
     for name, stepper in contenders.items():     # compile, and set the thread count each uses
         numba.set_num_threads(threads)
@@ -218,13 +220,13 @@ def print_breakdown(rows: list[dict]) -> None:
 def print_side_by_side(rows: list[dict]) -> None:
     print("part 1: the same elastic-block step (quadratic B-splines, APIC, neo-Hookean, float64), "
           "M particle-steps/s")
-    head = ("case", "particles", "threads", "solver", "general", "numba MLS", "Taichi", "Warp (1 thr.)",
-            "/numba", "/Taichi", "/Warp")
+    head = ("case", "particles", "threads", "solver APIC", "solver MLS", "general", "numba MLS", "Taichi",
+            "Warp (1 thr.)", "APIC/numba", "MLS/numba", "MLS/Taichi", "MLS/Warp")
     print("".join(f"{h:>14}" for h in head))
     for r in rows:
         cells = (f"{r['dimension']}D block", f"{r['particles']:,}", r["threads"], *(f"{r[k] / 1e6:.2f}" for k in
-                 ("solver", "general", "numba", "taichi", "warp")),
-                 *(f"{r['solver'] / r[k]:.2f}" for k in ("numba", "taichi", "warp")))
+                 ("solver", "mls", "general", "numba", "taichi", "warp")), f"{r['solver'] / r['numba']:.2f}",
+                 *(f"{r['mls'] / r[k]:.2f}" for k in ("numba", "taichi", "warp")))
         print("".join(f"{c:>14}" for c in cells))
 
 
@@ -236,6 +238,9 @@ def main() -> int:
                         help="the Python that has taichi and warp-lang (default: this one)")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--skip-part2", action="store_true")
+    parser.add_argument("--side-by-side-only", action="store_true", help="part 1 only (no breakdown, no part 2)")
+    parser.add_argument("--blocks", nargs="+", metavar="DIM:CELLS:STEPS",
+                        help="the blocks of part 1 (default: 2:112:60 2:225:15 3:32:6 3:40:4)")
     args = parser.parse_args()
     if args.quick:
         blocks = [(2, 56, 20), (3, 16, 5)]
@@ -246,10 +251,16 @@ def main() -> int:
         blocks = [(2, 112, 60), (2, 225, 15), (3, 32, 6), (3, 40, 4)]
         cases = [(2, 112, 100), (2, 225, 40), (3, 32, 20)]
         repeats = 3
+    if args.blocks:
+        blocks = [tuple(int(v) for v in b.split(":")) for b in args.blocks]
     warp_rate: dict = {}
     side = [side_by_side(dim, cells, threads, steps, args.frameworks_python, warp_rate)
             for dim, cells, steps in blocks for threads in args.threads]
     print_side_by_side(side)
+    if args.side_by_side_only:
+        if args.json:
+            args.json.write_text(json.dumps({"side_by_side": side}, indent=2))
+        return 0
     parts = [breakdown(dim, cells) for dim, cells in ((2, blocks[0][1]), (3, blocks[2 if len(blocks) > 2 else 1][1]))]
     print()
     print_breakdown(parts)

@@ -12,7 +12,7 @@ from collections.abc import Callable, Iterable, Iterator, Set
 
 FORMULATIONS = frozenset({"ulmpm", "tlmpm"})
 SCHEMES = frozenset({"musl", "usl", "usf"})
-TRANSFERS = frozenset({"flip", "pic", "apic"})
+TRANSFERS = frozenset({"flip", "pic", "apic", "mls"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "polygon", "mesh", "points", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall", "temperature", "heat_flux", "convection"})
 WALL_MODES = frozenset({"stick", "slip"})

@@ -152,10 +152,15 @@ def _p2g_node(dim: int) -> list[str]:
     def force(a):
         return _each(f"s{a}{{a}} * dw{{c}}", dim, " - ")
     return [
-        f"w = wx[i] * {_outer(dim)}", *_gradient(dim),
-        f"{_each('p{c}', dim)} = {_each('mv{c}', dim)}",
+        f"w = wx[i] * {_outer(dim)}",
         "if affine:",
         "    dx = (i - fx) * h[0]",
+        "if mls:   # w (x_I - x_p); D_p^-1 is in s (the MLS gradient, solver/transfer.py)",
+        *_indent(_each_line("dw{c} = w * d{c}", dim), 1),
+        "else:",
+        *_indent(_gradient(dim), 1),
+        f"{_each('p{c}', dim)} = {_each('mv{c}', dim)}",
+        "if affine:",
         *[f"    p{AXES[a]} += {_each(f'mc{a}{{a}} * d{{c}}', dim, ' + ')}" for a in range(dim)],
         _scatter("gm", "node", "+=", "w * m"),
         *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)],
@@ -179,7 +184,10 @@ def _p2g_particle(dim: int) -> list[str]:
         f"{_each('mb{c}', dim)} = {_each('m * acc[ap, {a}]', dim)}",
         f"{_each('mv{c}', dim)} = {_each('m * v[p, {a}]', dim)}",
         "vol = volume[p]",
-        *_tensor("s{a}{b} = vol * stress[p, {a}, {b}]", dim),
+        "if mls:",
+        *_indent(_tensor("s{a}{b} = vol * stress[p, {a}, {b}] * d_inv{b}", dim), 1),
+        "else:",
+        *_indent(_tensor("s{a}{b} = vol * stress[p, {a}, {b}]", dim), 1),
         _zeros(mc) + "   # m_p C_p (C holds one placeholder row without APIC)",
         "if affine:",
         *_indent(_tensor("mc{a}{b} = m * C[p, {a}, {b}]", dim), 1),
@@ -189,17 +197,21 @@ def _p2g_particle(dim: int) -> list[str]:
 
 def _p2g(dim: int) -> list[str]:
     return _shell(
-        "p2g(variant, x, v, C, mass, volume, stress, acc, frame, grid_mass, grid_mom, grid_force,\n"
+        "p2g(variant, x, v, C, mass, volume, stress, acc, frame, d_inv, grid_mass, grid_mom, grid_force,\n"
         "        copies_mass, copies_mom, copies_force, bad)",
         "m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =\n"
-        "    sum_p m_p w b_p - V_p sigma_p grad w. bad[t]: first particle of block t outside the grid.\n\n"
-        "    variant: (support, affine, loaded) constants; frame: (lower, h, inv_h, cells,\n"
-        "    strides, offset); copies_*: the nodal arrays of the other threads.",
-        ["support, affine_, loaded_ = variant",
+        "    sum_p m_p w b_p - V_p sigma_p grad w (MLS: w D_p^-1 (x_I - x_p) for grad w). bad[t]: first\n"
+        "    particle of block t outside the grid.\n\n"
+        "    variant: (support, affine, loaded, mls) constants; frame: (lower, h, inv_h, cells,\n"
+        "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
+        "    the other threads.",
+        ["support, affine_, loaded_, mls_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
+         f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
          "threads = copies_mass.shape[0] + 1",
          "shared_acc = acc.shape[0] == 1"],
-        ["S, affine, loaded = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2   # compile-time constants",
+        ["S, affine, loaded, mls = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2, mls_.ndim == 2"
+         "   # compile-time constants",
          "gm, gp, gf = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom), "
          "own(t, grid_force, copies_force)"],
         _p2g_particle(dim),
@@ -217,10 +229,10 @@ def _g2p_gather(dim: int) -> list[str]:
         *_indent(_each_line("vp{c} += w * v{c}", dim), 1),
         "    if blend:",
         *_indent(_each_line("dv{c} += w * (v{c} - v_old[node, {a}])", dim), 2),
-        "    if affine:",
-        "        dx = (i - fx) * h[0]",
-        *[f"        b{a}{b} += v{AXES[a]} * w * d{AXES[b]}" for a in range(dim) for b in range(dim)],
-        "if mode != REMAP:",
+        "if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)",
+        "    dx = (i - fx) * h[0]",
+        *[f"    b{a}{b} += v{AXES[a]} * w * d{AXES[b]}" for a in range(dim) for b in range(dim)],
+        "if mode != REMAP and not mls:",
         *_indent(_gradient(dim), 1),
         *[f"    l{a}{b} += v{AXES[a]} * dw{AXES[b]}" for a in range(dim) for b in range(dim)],
     ]
@@ -286,6 +298,8 @@ def _g2p_particle(dim: int) -> list[str]:
         *_indent(_each_line("x[p, {a}] += dt * vp{c}", dim), 1),
         "else:",
         *_indent(_each_line("x[p, {a}] += dt * rate[p, {a}]", dim), 1),
+        "if mls:   # L_p = B_p D_p^-1: C_p itself after a USL gather",
+        *_indent(_tensor("l{a}{b} = b{a}{b} * d_inv{b}", dim), 1),
         *_tensor("L[p, {a}, {b}] = l{a}{b}", dim),
         *_deformation_gradient(dim),
         f"J = {_determinant(list(range(dim)), list(range(dim)))}",
@@ -304,14 +318,15 @@ def _g2p(dim: int) -> list[str]:
         "    m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:\n"
         "    L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.\n"
         "    bad[t]: first particle of block t whose J = det F is not positive.\n\n"
-        "    variant: (support, mode, affine, blend) constants; frame: (lower, h, inv_h, cells,\n"
-        "    strides, offset); d_inv: D_p^-1 per axis (APIC).",
-        ["support, mode_, affine_, blend_ = variant",
+        "    variant: (support, mode, affine, blend, mls) constants; frame: (lower, h, inv_h, cells,\n"
+        "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS).",
+        ["support, mode_, affine_, blend_, mls_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          "threads = copies_mom.shape[0] + 1",
          "remaps = mode_.ndim - 1 == REMAP",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"],
-        ["S, affine, blend = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2   # compile-time constants",
+        ["S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2"
+         "   # compile-time constants",
          "mode = mode_.ndim - 1",
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom"],
         _g2p_particle(dim),

@@ -172,7 +172,7 @@ class Method(SceneModel):
     scheme: Literal["musl", "usl", "usf"] = "musl"
     # the registered shape functions, in the registry's order (the order error messages list them)
     shape_function: Literal[tuple(shape_functions.REGISTRY)] = "linear"
-    transfer: Literal["flip", "pic", "apic"] = "flip"
+    transfer: Literal["flip", "pic", "apic", "mls"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
 
     _formulation_supported = supported("formulation", "FORMULATIONS")
@@ -194,6 +194,11 @@ class Method(SceneModel):
         shape_function = info.data.get("shape_function")
         if value == "apic" and shape_function is not None and not shape_functions.REGISTRY[shape_function].apic:
             raise scene_error(shape_functions.REGISTRY[shape_function].apic_refusal)
+        if value == "mls" and shape_function is not None and not shape_functions.REGISTRY[shape_function].smooth:
+            smooth = [name for name, declared in shape_functions.REGISTRY.items() if declared.smooth]
+            raise scene_error(f"'mls' needs a C1 shape function ({' or '.join(smooth)}), not "
+                              f"'{shape_function}': its gradient w D_p^-1 (x_I - x_p) stands in for grad w, "
+                              "which only a C1 function makes vanish where the weight does")
         return require_supported(value, "TRANSFERS")
 
 

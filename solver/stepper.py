@@ -21,7 +21,7 @@ from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, material_slices
 from solver.thermal_schema import conducts, expands
-from solver.transfer import AffineTransfer
+from solver.transfer import affine_transfer
 
 # Nodes whose mass is below this fraction of the lightest particle's mass get no
 # acceleration (review eq. 2.63, see kernels.integrate_nodes). MUSL and USF take
@@ -143,8 +143,8 @@ class ExplicitMPM:
         if self.axisymmetry is not None:
             self.axisymmetry.place(self.grid, self.domain.first_node(0))   # radii from whole-grid node layers
         self.copies = threads.ScatterCopies(self.grid.n_nodes, self.scene.dimension, self.threads)
-        # APIC: PIC velocities plus the affine matrix C_p (solver/transfer.py)
-        self.affine = AffineTransfer(self.particles, self.grid) if self.scene.method.transfer == "apic" else None
+        # APIC, MLS: PIC velocities plus the affine matrix C_p (solver/transfer.py)
+        self.affine = affine_transfer(self.scene, self.particles, self.grid)
         self.hooks = step.scene_hooks(self)
 
     def _place_particles(self) -> None:

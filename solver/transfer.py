@@ -29,6 +29,18 @@ tests/verification/test_apic.py inverts a particle within 15 steps, with the
 general D_p and with the gradient form alike. C1 functions have grad w -> 0 as
 w -> 0, which bounds the term.
 
+MLS (Hu et al. 2018; review 5.5, spec A.12) is APIC whose weight gradient is the
+moving-least-squares one, grad w_Ip ~ w_Ip D_p^-1 (x_I - x_p), wherever the step
+uses a gradient: the stress enters P2G as f_I = -sum_p V_p sigma_p D_p^-1 w_Ip (x_I - x_p)
+and the velocity gradient is L_p = sum_I v_I w_Ip (x_I - x_p)^T D_p^-1, which for USL
+is C_p itself (the same v~_I^{t+dt}): one gather gives both. `MLSTransfer.gradients`
+writes that gradient over the stored stencil's dw right after the weights, so every
+kernel downstream (P2G force, kinematics, hoop terms) uses it unchanged; the fused
+kernels form it inline (solver/fused_template.py). Its force is bounded by the weight
+(f_I / m_I stays finite on a barely touched node) where grad w of a C0 function is
+not; with a C1 function both vanish together, and only C1 ones are allowed (scene
+validation, `ShapeFunction.smooth`).
+
 The kernels take the positions the weights were evaluated at (x_p for ULMPM, the
 reference X_p for TLMPM) and the node coordinates of the same grid, so TLMPM can
 call them too.
@@ -47,9 +59,14 @@ class AffineTransfer:
     """The APIC terms of one scene's transfers; the stepper calls these around its
     PIC kernels (flip_ratio 0)."""
 
+    mls = False   # whether the step's weight gradients are MLS's (`gradients`)
+
     def __init__(self, particles, grid):
         particles.require(AFFINE, (grid.h.shape[0], grid.h.shape[0]))
         self.node_x = grid.node_positions()
+
+    def gradients(self, spec, stencil, x, blocks: int) -> None:
+        """APIC keeps the shape function's gradients."""
 
     def p2g(self, spec, stencil, particles, x, grid_mom, copies_mom) -> None:
         affine_p2g(spec, stencil.idx, stencil.w, particles.mass, x, particles.extra[AFFINE], self.node_x, grid_mom,
@@ -60,6 +77,52 @@ class AffineTransfer:
         of the momentum mapped back to the grid (call before kernels.g2p moves x)."""
         affine_g2p(spec, stencil.idx, stencil.w, v_grid, x, particles.mass, self.node_x,
                    particles.extra[AFFINE], double_map, grid_mom, copies_mom)
+
+
+class MLSTransfer(AffineTransfer):
+    """APIC with the MLS gradient w_Ip D_p^-1 (x_I - x_p) in place of grad w_Ip."""
+
+    mls = True
+
+    def gradients(self, spec, stencil, x, blocks: int) -> None:
+        """Overwrite the stencil's dw with the MLS gradient (after the weights are evaluated at x)."""
+        mls_gradients(spec, stencil.idx, stencil.w, x, self.node_x, stencil.dw, blocks)
+
+
+TRANSFERS = {"apic": AffineTransfer, "mls": MLSTransfer}   # the transfers that carry C_p
+
+
+def affine_transfer(scene, particles, grid) -> AffineTransfer | None:
+    """The affine transfer the scene's method names, placed on `grid`; None for PIC and FLIP."""
+    kind = TRANSFERS.get(scene.method.transfer)
+    return kind(particles, grid) if kind is not None else None
+
+
+@njit(parallel=True, cache=True)
+def mls_gradients(spec, idx, w, x, node_x, dw, blocks):
+    """dw_Ip = w_Ip D_p^-1 (x_I - x_p), D_p = sum_I w_Ip (x_I - x_p)(x_I - x_p)^T taken
+    diagonal, as in `affine_g2p` (exactly diagonal for the tensor-product B-splines)."""
+    dims, nodes = spec
+    bounds = block_bounds(w.shape[0], blocks)
+    for t in prange(blocks):
+        _mls_gradients_block(dims, nodes, bounds[t], bounds[t + 1], idx, w, x, node_x, dw)
+
+
+@njit(cache=True)
+def _mls_gradients_block(dims, nodes, start, stop, idx, w, x, node_x, dw):
+    dim, nk = len(dims), len(nodes)
+    D = np.empty(dim)
+    for p in range(start, stop):
+        D[:] = 0.0
+        for k in range(nk):
+            node = idx[p, k]
+            for b in range(dim):
+                d = node_x[node, b] - x[p, b]
+                D[b] += w[p, k] * d * d
+        for k in range(nk):
+            node = idx[p, k]
+            for b in range(dim):
+                dw[p, k, b] = w[p, k] * (node_x[node, b] - x[p, b]) / D[b]
 
 
 @njit(parallel=True, cache=True)

@@ -6,4 +6,4 @@ modified: no uniform APIC constant."""
 from solver.shape.registry import ShapeFunction
 
 SHAPE_FUNCTIONS = (ShapeFunction(name="cubic_bspline", support=4, kernels="solver.shape.kernels.cubic_bspline",
-                                 least_cells=3),)
+                                 least_cells=3, smooth=True),)

@@ -6,4 +6,4 @@ node beyond it, so bodies keep half a cell from the grid ends (validation)."""
 from solver.shape.registry import ShapeFunction
 
 SHAPE_FUNCTIONS = (ShapeFunction(name="quadratic_bspline", support=3, kernels="solver.shape.kernels.quadratic_bspline",
-                                 apic_d=0.25, least_cells=2, end_margin=0.5),)
+                                 apic_d=0.25, least_cells=2, end_margin=0.5, smooth=True),)

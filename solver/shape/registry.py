@@ -19,6 +19,9 @@ class ShapeFunction:
     apic_d: float | None = None
     apic: bool = True  # transfer 'apic' may use it
     apic_refusal: str = ""  # the validation message where it may not
+    # C1 (its gradient is continuous, and vanishes where the weight does): transfer 'mls',
+    # whose gradient w D_p^-1 (x_I - x_p) stands in for grad w, may use it (solver/transfer.py)
+    smooth: bool = False
     formulations: frozenset[str] = frozenset({"ulmpm", "tlmpm"})
     formulation_refusal: str = ""  # the validation message for the other formulations
     least_cells: int = 1  # cells per axis the grid needs

@@ -28,7 +28,7 @@ class FusedPhases(Phases):
         self._support = fused.support_of(method.shape_function)
         self._kernels = fused.kernels(sim.scene.dimension)
         apic_d = shape.REGISTRY[method.shape_function].apic_d
-        # APIC's D_p^-1 per axis (unused without APIC); placed with the particles, after the grid
+        # APIC's (and MLS's) D_p^-1 per axis (unused without them); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
         self._place_arguments()
 
@@ -45,8 +45,9 @@ class FusedPhases(Phases):
         self._affine_matrix = sim.particles.extra["affine"] if apic else np.zeros((1, dim, dim))
         self._bad = np.empty(sim.threads, dtype=np.int64)   # each block's first failing particle
         affine, blend = fused.constant(apic), fused.constant(sim.flip_ratio > 0.0)
-        self._p2g_variant = (self._support, affine, fused.constant(sim.loads.any))
-        self._g2p_variants = {mode: (self._support, fused.constant(mode), affine, blend)
+        mls = fused.constant(apic and sim.affine.mls)
+        self._p2g_variant = (self._support, affine, fused.constant(sim.loads.any), mls)
+        self._g2p_variants = {mode: (self._support, fused.constant(mode), affine, blend, mls)
                               for mode in (fused.USL, fused.REMAP, fused.KINEMATICS)}
 
     def weights(self) -> None:
@@ -56,7 +57,7 @@ class FusedPhases(Phases):
         sim = self.sim
         p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
         self._kernels.p2g(self._p2g_variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc,
-                          self._frame, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+                          self._frame, self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")

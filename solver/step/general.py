@@ -38,6 +38,8 @@ class GeneralPhases(Phases):
         if outside >= 0:
             quantity, detail = sim.formulation.outside
             sim.fail(outside, quantity, detail.format(where=np.array2string(x[outside], precision=6)))
+        if sim.affine is not None:
+            sim.affine.gradients(sim.spec, sim.stencil, x, sim.threads)   # MLS: w D_p^-1 (x_I - x_p) for grad w
 
     # -- P2G ------------------------------------------------------------------
 

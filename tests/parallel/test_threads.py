@@ -1,9 +1,9 @@
 """threads = 1 and 2 give the same particles after 200 steps (issue 9).
 
 The scenes of test_equivalence.py (bodies colliding across slab boundaries, gravity,
-a slip floor), plus a 2D variant with quadratic B-splines, APIC and J2 plasticity:
+a slip floor), plus 2D variants with quadratic B-splines, APIC and J2 plasticity, and MLS:
 these run the fused kernels. The general (stored-stencil) kernels run the others:
-GIMP, cubic B-splines with APIC, TLMPM with a rigid pusher, an axisymmetric J2
+GIMP, cubic B-splines with APIC and with MLS, TLMPM with a rigid pusher, an axisymmetric J2
 billet under a rigid platen.
 Gathers and material updates give the same bits for any thread count; P2G adds
 each thread's particles into its own copy of the grid and sums the copies, so the
@@ -38,6 +38,10 @@ CASES = {
     "2d-musl-gimp-flip": scene(SCENE_2D, method__shape_function="gimp"),
     "2d-usl-cubic-apic": scene(SCENE_2D, method={"scheme": "usl", "shape_function": "cubic_bspline",
                                                  "transfer": "apic"}),
+    "2d-usl-quadratic-mls": scene(SCENE_2D, method={"scheme": "usl", "shape_function": "quadratic_bspline",
+                                                    "transfer": "mls"}),
+    "2d-musl-cubic-mls": scene(SCENE_2D, method={"scheme": "musl", "shape_function": "cubic_bspline",
+                                                 "transfer": "mls"}),
     "2d-tlmpm-quadratic-apic-rigid": TLMPM_2D,
     "axisymmetric-j2-billet": AXISYMMETRIC,
 }

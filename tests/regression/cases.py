@@ -16,6 +16,7 @@ from solver.mesh import inline_files
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 STEPS = 20
+SMOOTH = ("quadratic_bspline", "cubic_bspline")   # the shape functions transfer "mls" takes
 HEAVY = {"hypervelocity_lead": 8, "taylor_bar_3d": 10, "taylor_bar_3d_tlmpm": 10}   # 19k-37k particles in 3D
 
 
@@ -43,8 +44,8 @@ def _with(scene: dict, threads: int, **method) -> dict:
 def _method_matrix(base: dict, prefix: str, shapes: list[str], formulations=("ulmpm", "tlmpm")) -> dict[str, Case]:
     cases = {}
     for formulation, scheme, shape, transfer in itertools.product(
-            formulations, ("usl", "musl", "usf"), shapes, ("flip", "pic", "apic")):
-        if transfer == "apic" and shape == "linear":
+            formulations, ("usl", "musl", "usf"), shapes, ("flip", "pic", "apic", "mls")):
+        if (transfer == "apic" and shape == "linear") or (transfer == "mls" and shape not in SMOOTH):
             continue                                   # refused by validation
         if shape == "bernstein" and formulation != "tlmpm":
             continue
@@ -69,8 +70,8 @@ def cases() -> dict[str, Case]:
     # the general kernels on scenes the fused ones take, at one and two threads
     for (prefix, base), scheme, shape, transfer, threads in itertools.product(
             (("disks", disks), ("cube", cube)), ("usl", "musl"), ("linear", "quadratic_bspline"),
-            ("flip", "pic", "apic"), (1, 2)):
-        if transfer == "apic" and shape == "linear":
+            ("flip", "pic", "apic", "mls"), (1, 2)):
+        if (transfer == "apic" and shape == "linear") or (transfer == "mls" and shape not in SMOOTH):
             continue
         scene = _with(base, threads, scheme=scheme, shape_function=shape, transfer=transfer, flip_ratio=0.95)
         out[f"{prefix}-fused-{scheme}-{shape}-{transfer}-t{threads}"] = Case(scene, threads=threads)

@@ -128,8 +128,9 @@ def test_dam_break_is_karamelo_4_5():
 
 
 def test_sod_is_review_case_6_1_4():
-    """E4: 300 cells, 3 particles per cell, left rho = p = 1, right rho = 0.125, p = 0.1."""
+    """E4 (issue 18's resolution): 400 cells, 3 particles per cell, left rho = p = 1, right
+    rho = 0.125, p = 0.1."""
     scene = load_scene(DEFAULT_DIR / "sod_shock_tube.json")
     summary = summarize(scene)
-    assert summary.grid_shape == [300] and summary.particles == 900
+    assert summary.grid_shape == [400] and summary.particles == 1200
     assert [(b.initial_density, b.initial_pressure) for b in scene.bodies] == [(1.0, 1.0), (0.125, 0.1)]

@@ -105,8 +105,8 @@ class TestIdealGas:
         assert np.allclose(entropy[p.body == 1], 0.1 / 0.125**1.4, rtol=1e-4)
 
     def test_artificial_viscosity_only_in_compression(self):
-        _, p, [(gas, sl)] = state_of(sod())
-        h = 1 / 300
+        scene, p, [(gas, sl)] = state_of(sod())
+        h = min(scene.cell_sizes())   # L_e: the smallest cell side
         for rate, expect_q in ((-5.0, True), (5.0, False)):
             p.extra["internal_energy"][:] = 2.5
             p.volume[:] = p.volume0 * (1 + rate * 1e-6)

@@ -55,6 +55,8 @@ METHODS = {
     "musl-quadratic-apic": {"scheme": "musl", "shape_function": "quadratic_bspline", "transfer": "apic"},
     "usl-quadratic-flip": {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": "flip",
                            "flip_ratio": 0.95},
+    "usl-quadratic-mls": {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": "mls"},
+    "musl-quadratic-mls": {"scheme": "musl", "shape_function": "quadratic_bspline", "transfer": "mls"},
 }
 
 
@@ -76,7 +78,7 @@ def test_fused_step_gives_the_general_step(dimension, method):
     assert np.max(np.abs(b.stress[:, 0, 0])) > 300.0   # the bodies did collide (sigma_xx of order rho c v)
     for name in ("x", "v", "F", "stress", "volume"):
         assert relative_difference(getattr(a, name), getattr(b, name)) <= TOLERANCE, name
-    if METHODS[method]["transfer"] == "apic":
+    if METHODS[method]["transfer"] in ("apic", "mls"):
         assert relative_difference(a.extra["affine"], b.extra["affine"]) <= TOLERANCE
     assert fast.boundary_work == pytest.approx(general.boundary_work, rel=1e-9, abs=1e-12)
 

@@ -1,0 +1,68 @@
+"""The MLS speed table and plot of docs/benchmarks.md from repeated throughput runs.
+
+    for i in 1 2 3; do python benchmarks/throughput.py --frameworks-python PY --side-by-side-only \\
+        --blocks 2:225:15 3:32:6 --json run_$i.json; done
+    python benchmarks/mls_speed_plot.py run_*.json          # -> docs/images/mls_speed.png
+
+Each run has the five implementations side by side (benchmarks/throughput.py);
+the table gives, per block and thread count, the median of the runs and their
+range (min-max) for the rates and for the ratios taken within each run.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+IMAGE = Path(__file__).resolve().parent.parent / "docs" / "images" / "mls_speed.png"
+RATES = (("solver", "solver APIC"), ("mls", "solver MLS"), ("numba", "numba MLS"), ("taichi", "Taichi"),
+         ("warp", "Warp (1 thread)"))
+RATIOS = (("mls", "solver", "MLS / APIC", None), ("mls", "numba", "MLS / numba", 0.9),
+          ("mls", "taichi", "MLS / Taichi", 2.0), ("mls", "warp", "MLS / Warp", 1.2))
+
+
+def spread(values: list[float], scale: float = 1.0, digits: int = 2) -> str:
+    v = np.array(values) / scale
+    return f"{np.median(v):.{digits}f} ({v.min():.{digits}f}-{v.max():.{digits}f})"
+
+
+def main(paths: list[str]) -> int:
+    runs = [json.loads(Path(p).read_text())["side_by_side"] for p in paths]
+    keys = [(r["dimension"], r["particles"], r["threads"]) for r in runs[0]]
+    rows = {k: [next(r for r in run if (r["dimension"], r["particles"], r["threads"]) == k) for run in runs]
+            for k in keys}
+    print("| block | threads | " + " | ".join(t for _, t in RATES) + " | " + " | ".join(t for *_, t, _ in RATIOS) + " |")
+    print("|---" * (2 + len(RATES) + len(RATIOS)) + "|")
+    for (dim, n, threads), rs in rows.items():
+        rates = [spread([r[k] for r in rs], 1e6) for k, _ in RATES]
+        ratios = [spread([r[a] / r[b] for r in rs]) for a, b, _, _ in RATIOS]
+        print(f"| {dim}D, {n:,} | {threads} | " + " | ".join(rates) + " | " + " | ".join(ratios) + " |")
+    figure = Figure(figsize=(10, 4.2))
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(1, len(RATIOS) - 1, sharey=False)
+    labels = [f"{dim}D\n{threads} thr." for dim, _, threads in rows]
+    for ax, (a, b, title, goal) in zip(axes, RATIOS[1:]):
+        values = np.array([[r[a] / r[b] for r in rs] for rs in rows.values()])
+        median = np.median(values, axis=1)
+        ax.bar(range(len(rows)), median, color="tab:blue", alpha=0.7)
+        ax.errorbar(range(len(rows)), median, yerr=[median - values.min(axis=1), values.max(axis=1) - median],
+                    fmt="none", color="k", capsize=3)
+        ax.axhline(goal, color="tab:red", linestyle="--", label=f"goal {goal}")
+        ax.axhline(1.0, color="0.5", linewidth=0.8)
+        ax.set_xticks(range(len(rows)), labels)
+        ax.set_title(title)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[0].set_ylabel("ratio of particle-steps/s (median, min-max of runs)")
+    figure.suptitle(f"MLS-MPM elastic block, side by side ({len(runs)} runs, shared 2-core machine)")
+    figure.tight_layout()
+    figure.savefig(IMAGE, dpi=110)
+    print(f"wrote {IMAGE}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
