@@ -309,6 +309,13 @@ for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
 
 # --------------------------------------------------------------------------- bodies, conditions
 
+class GeostaticStress(SceneModel):
+    """sigma_v = -rho g depth below the body's top, sigma_h = k0 sigma_v (solver/initial_stress.py)."""
+
+    type: Literal["geostatic"]
+    k0: NonNegative | None = None   # None: 1 - sin(friction_angle) of the body's material
+
+
 class Body(SceneModel):
     name: Annotated[str, Field(min_length=1)]
     material: str
@@ -319,6 +326,7 @@ class Body(SceneModel):
     initial_density: Positive | None = None  # ideal_gas bodies only
     initial_pressure: NonNegative | None = None  # ideal_gas bodies only
     velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
+    initial_stress: GeostaticStress | None = None   # None: stress-free
 
 
 class VelocityCondition(SceneModel):
@@ -631,6 +639,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
             expressions_ok(f"{path}.initial_velocity", body.initial_velocity, SPACE_VARIABLES)
         if material is not None:
             problems += _body_material_problems(path, body, material, length_ok)
+            problems += _initial_stress_problems(path, body, material, scene)
         if scene.method.formulation == "ulmpm" and grid_ok and geometry_ok:
             problems += _outside_grid(f"{path}.geometry", body, scene)
 
@@ -727,6 +736,25 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
                                                  "use initial_velocity for deformable bodies"))
         else:
             length_ok(f"{path}.velocity", body.velocity)
+    return problems
+
+
+def _initial_stress_problems(path: str, body: Body, material: Any, scene: Scene) -> list[tuple[str, str]]:
+    """A geostatic stress needs gravity along one axis, a solid with a density, and k0
+    unless the material has a friction angle to take it from."""
+    if body.initial_stress is None:
+        return []
+    path = f"{path}.initial_stress"
+    gravity = [g for g in scene.gravity or [] if g != 0]
+    problems = []
+    if len(gravity) != 1:
+        problems.append((path, "a geostatic stress needs a gravity along one axis of the grid "
+                               f"(gravity is {scene.gravity})"))
+    if isinstance(material, (Rigid, IdealGas)):
+        problems.append((path, f"not for a {material.model!r} material"))
+    elif body.initial_stress.k0 is None and not hasattr(material, "default_k0"):
+        problems.append((f"{path}.k0", f"required for a {material.model!r} material (the default 1 - sin(phi) "
+                                       "needs a friction_angle)"))
     return problems
 
 
