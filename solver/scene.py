@@ -40,6 +40,7 @@ from solver import capabilities
 from solver import materials as material_registry
 from solver import shape as shape_functions
 from solver import geometry as geometry_shapes
+from solver.boundary import face_material
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
@@ -358,7 +359,16 @@ class WallCondition(SceneModel):
         return self
 
 
-BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition], Field(discriminator="type")]
+class AbsorbingCondition(SceneModel):
+    """Viscous (Lysmer-Kuhlemeyer) dashpots on a face of the grid (solver/absorbing.py)."""
+
+    type: Literal["absorbing"]
+    face: Literal["x-", "x+", "y-", "y+", "z-", "z+"]
+
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
+
+
+BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition, AbsorbingCondition], Field(discriminator="type")]
 
 
 # --------------------------------------------------------------------------- loads, damping
@@ -672,10 +682,28 @@ def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
             if axis >= scene.dimension:
                 problems.append((f"{path}.face", f"{condition.face!r} is not a face of a {scene.dimension}D grid"))
             elif condition.face in walls:
-                problems.append((f"{path}.face", f"face {condition.face!r} already has a wall "
-                                                 f"(boundary_conditions[{walls[condition.face]}])"))
-            walls.setdefault(condition.face, i)
+                other = walls[condition.face]
+                problems.append((f"{path}.face", f"face {condition.face!r} already has a "
+                                                 f"{'wall' if other[1] == 'wall' else 'boundary condition'} "
+                                                 f"(boundary_conditions[{other[0]}])"))
+            elif isinstance(condition, AbsorbingCondition):
+                problems += _absorbing_problems(path, condition, scene)
+            walls.setdefault(condition.face, (i, condition.type))
     return problems
+
+
+def _absorbing_problems(path: str, condition: AbsorbingCondition, scene: Scene) -> list[tuple[str, str]]:
+    """Dashpots need one elastic material at the face, one process, a planar scene."""
+    if scene.axisymmetric:
+        return [(f"{path}.type", "absorbing boundaries are not supported yet in axisymmetric scenes")]
+    if scene.parallel.processes > 1:
+        return [(f"{path}.type", f"absorbing boundaries are not supported yet with several processes "
+                                 f"(parallel.processes = {scene.parallel.processes})")]
+    material = face_material(scene, condition.face)
+    if material is None or not hasattr(material, "lame_parameters"):
+        return [(f"{path}.face", "the bodies that reach this face (within a cell) must be of one elastic "
+                                 "material: its impedances rho c_p and rho c_s make the dashpots")]
+    return []
 
 
 def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_ok) -> list[tuple[str, str]]:
