@@ -79,6 +79,15 @@ def _rotate(A, V, p, q):
 
 
 @njit(cache=True)
+def sort_descending(values, order):
+    """order = the indices of `values` from the largest down (three values, no allocation)."""
+    order[0], order[1], order[2] = 0, 1, 2
+    for i, j in ((0, 1), (1, 2), (0, 1)):
+        if values[order[j]] > values[order[i]]:
+            order[i], order[j] = order[j], order[i]
+
+
+@njit(cache=True)
 def plane_value(sig, i, j, sin_phi, two_c_cos):
     return (sig[i] - sig[j]) + (sig[i] + sig[j]) * sin_phi - two_c_cos
 
@@ -104,8 +113,7 @@ def _return_to_planes(trial, planes, count, lam, G, sin_phi, sin_psi, two_c_cos,
     """sig = trial - sum_b dg_b D n_b with every plane of `planes[:count]` satisfied;
     returns the smallest multiplier (negative: the return left this region)."""
     f, n, Dn = scratch[0], scratch[1], scratch[2:4]
-    M = np.empty((2, 2))
-    rhs = np.empty(2)
+    M, rhs = scratch[4:6, :2], scratch[6, :2]
     for b in range(count):
         _gradient(planes[b, 0], planes[b, 1], sin_psi, n)
         _elastic_times(n, lam, G, Dn[b])
@@ -190,7 +198,7 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, c
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     A, V = np.empty((3, 3)), np.empty((3, 3))
     values, trial, sig = np.empty(3), np.empty(3), np.empty(3)
-    planes, scratch = np.empty((2, 2), np.int64), np.empty((4, 3))
+    planes, scratch, order = np.empty((2, 2), np.int64), np.empty((7, 3)), np.empty(3, np.int64)
     lam = K - 2.0 * G / 3.0
     two_c_cos = 2.0 * cohesion * math.sqrt(1.0 - sin_phi * sin_phi)
     for p in range(lo, hi):
@@ -203,7 +211,7 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, c
             for b in range(3):
                 A[a, b] = stress[p, a, b]
         eigen_symmetric(A, values, V)
-        order = np.argsort(-values)
+        sort_descending(values, order)
         for k in range(3):
             trial[k] = values[order[k]]
         state[p] = return_map(trial, lam, G, sin_phi, sin_psi, cohesion, cutoff, sig, planes, scratch)
