@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
 
+from mpm_cases import Case  # noqa: E402
 from solver import materials, run  # noqa: E402
 from solver.results import read_frame, read_series  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
@@ -166,7 +167,7 @@ def collapse_figure(plt, folder: Path):
         start = time.perf_counter()
         result = run(scene, folder / name)
         wall = time.perf_counter() - start
-        case = tc.Case(result)
+        case = Case(result)
         runout, height, speed = tc.deposit(case, scene)
         width = scene["bodies"][0]["geometry"]["upper"][0]
         first, last = read_frame(result.result_path, 0)["fields"], read_frame(result.result_path, -1)["fields"]
