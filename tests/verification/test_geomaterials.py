@@ -223,3 +223,25 @@ def test_oedometer(model, dim):
     assert plastic.sum() > 200 and elastic.sum() > 200
     assert np.allclose(sh[elastic] / sv[elastic], k_elastic, rtol=1e-12)
     assert np.allclose(sh[plastic], ka * sv[plastic] - 2 * C * math.sqrt(ka), rtol=0, atol=ROUND_OFF * sv.max())
+
+
+@pytest.mark.parametrize("model", ["mohr_coulomb", "drucker_prager"])
+def test_rigid_rotation_turns_the_stress_and_creates_none(model):
+    """Confined compression onto the yield surface, then a rigid spin by 90 degrees about x
+    (L = W, the objective rate of the other plastic models): sigma = R sigma0 R^T. The
+    Hughes-Winget rotation turns by 2 atan(w dt / 2) per step, short by theta (w dt)^2 / 12
+    = 3.2e-7 rad after 1000 steps: 1e-6 of the stress bounds the components' error."""
+    point = MaterialPoint(soil({"model": model}), 3)
+    for _ in range(600):                              # past the onset at 139 kPa
+        point.step(np.diag([0.0, 0.0, -0.05]), 1e-3)
+    assert point.state("yield_state") > 0
+    point.rigid_volume = True
+    sigma0, eps0 = point.stress.copy(), point.state("plastic_strain")
+    steps, dt = 1000, 1e-6
+    w = math.pi / 2 / (steps * dt)
+    spin = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -w], [0.0, w, 0.0]])
+    for _ in range(steps):
+        point.step(spin, dt)
+    R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+    np.testing.assert_allclose(point.stress, R @ sigma0 @ R.T, rtol=0, atol=1e-6 * np.abs(sigma0).max())
+    assert point.state("plastic_strain") == pytest.approx(eps0, rel=1e-9)
