@@ -2,7 +2,7 @@
 
 The scenes of test_equivalence.py (bodies colliding across slab boundaries, gravity,
 a slip floor), plus a 2D variant with quadratic B-splines, APIC and J2 plasticity, and Drucker-Prager (2D)
-and Mohr-Coulomb (3D) variants:
+and Mohr-Coulomb (3D) variants and an axisymmetric Drucker-Prager billet:
 these run the fused kernels. The general (stored-stencil) kernels run the others:
 GIMP, cubic B-splines with APIC, TLMPM with a rigid pusher, an axisymmetric J2
 billet under a rigid platen.
@@ -45,6 +45,9 @@ CASES = {
     "axisymmetric-j2-billet": AXISYMMETRIC,
     "2d-musl-linear-flip-drucker-prager": scene(SCENE_2D, materials={"rubber": {**SOIL, "model": "drucker_prager"}}),
     "3d-musl-linear-flip-mohr-coulomb": scene(SCENE_3D, materials={"rubber": {**SOIL, "model": "mohr_coulomb"}}),
+    "axisymmetric-drucker-prager-billet": scene(AXISYMMETRIC, materials__steel={
+        "model": "drucker_prager", "density": 7800.0, "youngs_modulus": 200e9, "poisson_ratio": 0.3,
+        "friction_angle": 20.0, "cohesion": 0.3e9, "dilation_angle": 10.0}),
 }
 PLASTIC_CASES = ("j2", "drucker-prager", "mohr-coulomb")
 
