@@ -245,3 +245,17 @@ def test_rigid_rotation_turns_the_stress_and_creates_none(model):
     R = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
     np.testing.assert_allclose(point.stress, R @ sigma0 @ R.T, rtol=0, atol=1e-6 * np.abs(sigma0).max())
     assert point.state("plastic_strain") == pytest.approx(eps0, rel=1e-9)
+
+
+def test_strength_parameters_are_checked_at_their_paths():
+    from solver.scene import SceneError, load_scene
+    scene = {"dimension": 2, "grid": {"lower": [0, 0], "upper": [1, 1], "cell_size": 0.1},
+             "materials": {"sand": soil({"model": "drucker_prager"}, dilation_angle=40.0),
+                           "clay": soil({"model": "mohr_coulomb"}, friction_angle=0.0, dilation_angle=0.0, cohesion=0.0)},
+             "bodies": [{"name": "b", "material": "sand", "geometry": {"type": "box", "lower": [0, 0], "upper": [1, 1]}}],
+             "time": {"end": 1.0}}
+    with pytest.raises(SceneError) as error:
+        load_scene(scene)
+    message = str(error.value)
+    assert "materials.sand.dilation_angle: must be <= friction_angle (30)" in message
+    assert "materials.clay.cohesion: must be > 0 when friction_angle is 0" in message
