@@ -10,7 +10,9 @@ verification figures -> docs/benchmarks.md, docs/images/geo_*.png.
    plasticity with a yield stress of the order of the column's stresses, Drucker-Prager,
    Mohr-Coulomb) is timed, interleaved, `repeats` times; and whole steps of the scene
    are timed with each material from the same start. Ratios to J2 with their spread.
-2. Figures: the oedometer stress path (single material point), the strip footing's
+2. Errors and wall times of the single-point, geostatic and absorbing cases (the
+   functions of their tests).
+3. Figures: the oedometer stress path (single material point), the strip footing's
    load-settlement curves, the column collapses' deposits against Lube et al. (2005).
 """
 from __future__ import annotations
@@ -110,6 +112,73 @@ def ratio_rows(times):
     return {name: [t / b for t, b in zip(values, base)] for name, values in times.items()}
 
 
+def timed(function, *args):
+    start = time.perf_counter()
+    value = function(*args)
+    return value, time.perf_counter() - start
+
+
+def triaxial_error(extra, compression):
+    import test_geomaterials as tg
+    from material_point import MaterialPoint
+    p0 = 1e5
+    point = MaterialPoint(tg.soil(extra), 3, stress=-p0 * np.eye(3))
+    for _ in range(250):
+        point.mixed_step(np.diag([0.0, 0.0, -0.05 if compression else 0.05]), 4e-3, held=(0, 1), target=-p0,
+                         stiffness=2 * tg.K + 2 * tg.G / 3)
+    return abs(point.stress[2, 2] / tg.axial_failure_stress(extra, p0, compression) - 1)
+
+
+def surface_error(extra):
+    import test_geomaterials as tg
+    return max(abs(tg.phi_value(extra, after)) for _, after, _, _ in tg.random_plastic_steps(tg.soil(extra), 3)) / 1e5
+
+
+def oedometer_error(model):
+    """Largest deviation from nu / (1 - nu) (elastic, relative) and from the Rankine line
+    (plastic, of the largest stress)."""
+    import test_geomaterials as tg
+    sv, sh, state = tg.oedometer(tg.soil({"model": model}), 3).T
+    ka = (1 - math.sin(math.radians(tg.PHI))) / (1 + math.sin(math.radians(tg.PHI)))
+    elastic, plastic = state == 0, state > 0
+    e1 = np.abs(sh[elastic] / sv[elastic] / (tg.NU / (1 - tg.NU)) - 1).max()
+    e2 = np.abs(sh[plastic] - (ka * sv[plastic] - 2 * tg.C * math.sqrt(ka))).max() / sv.max()
+    return max(e1, e2)
+
+
+def verification_rows():
+    """(case, error, wall time) of the single-point, geostatic and absorbing cases."""
+    import test_absorbing as ta
+    import test_geomaterials as tg
+    import test_geostatic as tgs
+    rows = []
+    for extra in tg.MODELS:
+        name = extra.get("fit", extra["model"])
+        for compression in (True, False):
+            error, wall = timed(triaxial_error, extra, compression)
+            rows.append((f"triaxial {'compression' if compression else 'extension'}, {name}: axial stress at "
+                         "failure, relative", error, wall))
+        error, wall = timed(surface_error, extra)
+        rows.append((f"{name}: max abs(Phi) / 100 kPa after 300 random plastic steps", error, wall))
+    for model in ("mohr_coulomb", "drucker_prager"):
+        error, wall = timed(oedometer_error, model)
+        rows.append((f"oedometer, {model}: elastic K0 and Rankine line", error, wall))
+    for height in (1.0, 0.975):
+        (_, fastest), wall = timed(tgs.settle, tgs.column(height, {"type": "geostatic"}))
+        rows.append((f"geostatic column, top at {height} m: max speed / sqrt(g H)", fastest / math.sqrt(tgs.G * height),
+                     wall))
+    (_, shocked), wall = timed(tgs.settle, tgs.column(1.0, None))
+    rows.append(("the same column stress-free (gravity shock): max speed / sqrt(g H)", shocked / math.sqrt(tgs.G),
+                 wall))
+    for label, scene, speed in (("1D bar, absorbing ends", ta.bar(("x-", "x+")), ta.C_P),
+                                ("1D bar, free ends", ta.bar(()), ta.C_P),
+                                ("2D strip, P wave", ta.bar(("x-", "x+"), 2, "p"), ta.C_P),
+                                ("2D strip, S wave", ta.bar(("x-", "x+"), 2, "s"), ta.C_S)):
+        (left, _), wall = timed(ta.energy_left, scene, speed)
+        rows.append((f"{label}: energy left / initial", left, wall))
+    return rows
+
+
 def oedometer_figure(plt):
     import test_geomaterials as tg
     fig, ax = plt.subplots(figsize=(5, 4))
@@ -193,6 +262,9 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--no-figures", action="store_true")
     args = parser.parse_args()
+    print("| case | error | wall time (s) |\n|---|---|---|")
+    for case, error, wall in verification_rows():
+        print(f"| {case} | {error:.2g} | {wall:.2f} |")
     updates, states, count = update_costs(args.repeats)
     print(f"stress update, {count} particles (50 copies of the column mid-collapse ; yield states 0..4 of one copy: {states.tolist()}), ns per particle,"
           f" median (min .. max) of {args.repeats}")
