@@ -13,6 +13,28 @@ from solver.expressions import compile_expression
 AXES = {"x": 0, "y": 1, "z": 2}
 
 
+def face_nodes(grid, face: str) -> np.ndarray:
+    """The nodes of a face ("x-", ..., "z+") of the grid."""
+    axis = AXES[face[0]]
+    layer = 0 if face[1] == "-" else int(grid.cells[axis])
+    index = np.arange(grid.n_nodes)
+    return np.flatnonzero((index // grid.strides[axis]) % (grid.cells[axis] + 1) == layer)
+
+
+def face_material(scene, face: str):
+    """The material of the bodies whose bounding box reaches the face (within a cell);
+    None if no body does, or if they are of different materials (the scene refuses both)."""
+    axis, upper = AXES[face[0]], face[1] == "+"
+    end = (scene.grid_upper() if upper else scene.grid_lower())[axis]
+    reach = scene.cell_sizes()[axis]
+    names = set()
+    for body in scene.bodies:
+        lower, top = body.geometry.shape().bounding_box()
+        if abs((top if upper else lower)[axis] - end) <= reach:
+            names.add(body.material)
+    return scene.materials[names.pop()] if len(names) == 1 else None
+
+
 class Constraints:
     def __init__(self, scene, grid):
         nodes, axes, values, expressions = [], [], [], []
@@ -22,12 +44,10 @@ class Constraints:
         for bc in scene.boundary_conditions:
             if bc.type == "wall":
                 axis = AXES[bc.face[0]]
-                layer = 0 if bc.face[1] == "-" else int(grid.cells[axis])
-                index = np.arange(grid.n_nodes)
-                on_face = (index // grid.strides[axis]) % (grid.cells[axis] + 1) == layer
+                on_face = face_nodes(grid, bc.face)
                 fixed_axes = range(dim) if bc.mode == "stick" else (axis,)
                 for a in fixed_axes:
-                    sel = np.flatnonzero(on_face)
+                    sel = on_face
                     nodes.append(sel)
                     axes.append(np.full(sel.size, a))
                     values.append(np.zeros(sel.size))

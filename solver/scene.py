@@ -43,6 +43,7 @@ from solver import shape as shape_functions
 from solver import geometry as geometry_shapes
 from solver import mesh as meshes
 from solver import points as point_sets
+from solver.boundary import face_material
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
@@ -413,6 +414,13 @@ for _combined in (UnionGeometry, DifferenceGeometry, IntersectionGeometry):
 
 # --------------------------------------------------------------------------- bodies, conditions
 
+class GeostaticStress(SceneModel):
+    """sigma_v = -rho g depth below the body's top, sigma_h = k0 sigma_v (solver/initial_stress.py)."""
+
+    type: Literal["geostatic"]
+    k0: NonNegative | None = None   # None: 1 - sin(friction_angle) of the body's material
+
+
 class Body(SceneModel):
     name: Annotated[str, Field(min_length=1)]
     material: str
@@ -423,6 +431,7 @@ class Body(SceneModel):
     initial_density: Positive | None = None  # ideal_gas bodies only
     initial_pressure: NonNegative | None = None  # ideal_gas bodies only
     velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
+    initial_stress: GeostaticStress | None = None   # None: stress-free
 
 
 class VelocityCondition(SceneModel):
@@ -498,8 +507,18 @@ class ConvectionCondition(SceneModel):
 
 THERMAL_CONDITIONS = (TemperatureCondition, HeatFluxCondition, ConvectionCondition)
 
+
+class AbsorbingCondition(SceneModel):
+    """Viscous (Lysmer-Kuhlemeyer) dashpots on a face of the grid (solver/absorbing.py)."""
+
+    type: Literal["absorbing"]
+    face: Face
+
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
+
+
 BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition, TemperatureCondition, HeatFluxCondition,
-                                    ConvectionCondition], Field(discriminator="type")]
+                                    ConvectionCondition, AbsorbingCondition], Field(discriminator="type")]
 
 
 # --------------------------------------------------------------------------- loads, damping
@@ -781,6 +800,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
             expressions_ok(f"{path}.initial_velocity", body.initial_velocity, SPACE_VARIABLES)
         if material is not None:
             problems += _body_material_problems(path, body, material, length_ok)
+            problems += _initial_stress_problems(path, body, material, scene)
         if scene.method.formulation == "ulmpm" and grid_ok and geometry_ok:
             problems += _outside_grid(f"{path}.geometry", body, scene)
 
@@ -809,15 +829,33 @@ def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
             length_ok(f"{path}.where.lower", condition.where.lower)
             length_ok(f"{path}.where.upper", condition.where.upper)
             length_ok(f"{path}.velocity", condition.velocity)
-        elif isinstance(condition, WallCondition):
+        elif isinstance(condition, (WallCondition, AbsorbingCondition)):   # (thermal faces: thermal_problems)
             axis = "xyz".index(condition.face[0])
             if axis >= scene.dimension:
                 problems.append((f"{path}.face", f"{condition.face!r} is not a face of a {scene.dimension}D grid"))
             elif condition.face in walls:
-                problems.append((f"{path}.face", f"face {condition.face!r} already has a wall "
-                                                 f"(boundary_conditions[{walls[condition.face]}])"))
-            walls.setdefault(condition.face, i)
+                other = walls[condition.face]
+                problems.append((f"{path}.face", f"face {condition.face!r} already has a "
+                                                 f"{'wall' if other[1] == 'wall' else 'boundary condition'} "
+                                                 f"(boundary_conditions[{other[0]}])"))
+            elif isinstance(condition, AbsorbingCondition):
+                problems += _absorbing_problems(path, condition, scene)
+            walls.setdefault(condition.face, (i, condition.type))
     return problems
+
+
+def _absorbing_problems(path: str, condition: AbsorbingCondition, scene: Scene) -> list[tuple[str, str]]:
+    """Dashpots need one elastic material at the face, one process, a planar scene."""
+    if scene.axisymmetric:
+        return [(f"{path}.type", "absorbing boundaries are not supported yet in axisymmetric scenes")]
+    if scene.parallel.processes > 1:
+        return [(f"{path}.type", f"absorbing boundaries are not supported yet with several processes "
+                                 f"(parallel.processes = {scene.parallel.processes})")]
+    material = face_material(scene, condition.face)
+    if material is None or not hasattr(material, "lame_parameters"):
+        return [(f"{path}.face", "the bodies that reach this face (within a cell) must be of one elastic "
+                                 "material: its impedances rho c_p and rho c_s make the dashpots")]
+    return []
 
 
 def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_ok) -> list[tuple[str, str]]:
@@ -893,6 +931,25 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
                                                  "use initial_velocity for deformable bodies"))
         else:
             length_ok(f"{path}.velocity", body.velocity)
+    return problems
+
+
+def _initial_stress_problems(path: str, body: Body, material: Any, scene: Scene) -> list[tuple[str, str]]:
+    """A geostatic stress needs gravity along one axis, a solid with a density, and k0
+    unless the material has a friction angle to take it from."""
+    if body.initial_stress is None:
+        return []
+    path = f"{path}.initial_stress"
+    gravity = [g for g in scene.gravity or [] if g != 0]
+    problems = []
+    if len(gravity) != 1:
+        problems.append((path, "a geostatic stress needs a gravity along one axis of the grid "
+                               f"(gravity is {scene.gravity})"))
+    if isinstance(material, (Rigid, IdealGas)):
+        problems.append((path, f"not for a {material.model!r} material"))
+    elif body.initial_stress.k0 is None and not hasattr(material, "default_k0"):
+        problems.append((f"{path}.k0", f"required for a {material.model!r} material (the default 1 - sin(phi) "
+                                       "needs a friction_angle)"))
     return problems
 
 

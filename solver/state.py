@@ -5,7 +5,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from solver import materials
+from solver import initial_stress, materials
 from solver.expressions import compile_expression
 from solver.seeding import seed
 
@@ -207,4 +207,5 @@ def material_slices(scene, body: np.ndarray) -> dict[str, slice]:
 def make_materials(scene, slices: dict[str, slice], particles: Particles) -> list[tuple[object, slice]]:
     models = [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
     materials.init_particles(models, particles, scene)
+    initial_stress.apply(scene, particles)
     return models

@@ -18,7 +18,8 @@ calls the method of every hook that has one, in the order the hooks were made
 
 The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_step),
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
-(end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `damping`
+(end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `absorbing`
+boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress).
 
@@ -30,6 +31,7 @@ has added its part (solver/step/phases.py).
 from __future__ import annotations
 
 from solver import kernels
+from solver.absorbing import AbsorbingFaces
 from solver.damping import Damping
 from solver.thermal import make_conduction, make_expansion
 
@@ -96,6 +98,11 @@ def _applied_loads(sim):
     return sim.applied_loads
 
 
+def _absorbing_faces(sim):
+    absorbing = any(condition.type == "absorbing" for condition in sim.scene.boundary_conditions)
+    return AbsorbingFaces(sim.scene, sim.grid) if absorbing else None
+
+
 def _damping(sim):
     return Damping(sim.scene.damping) if sim.scene.damping is not None else None
 
@@ -104,8 +111,8 @@ def _damping(sim):
 # compose in: rigid bodies impose before the boundary conditions, which win where both
 # apply; the loads' work is counted after the rigid bodies moved; damping acts on the
 # forces of every other hook.
-HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping, make_conduction,
-         make_expansion]
+HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _absorbing_faces, _damping,
+         make_conduction, make_expansion]
 
 
 def scene_hooks(sim) -> Hooks:

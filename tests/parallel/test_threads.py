@@ -1,7 +1,8 @@
 """threads = 1 and 2 give the same particles after 200 steps (issue 9).
 
 The scenes of test_equivalence.py (bodies colliding across slab boundaries, gravity,
-a slip floor), plus 2D variants with quadratic B-splines, APIC and J2 plasticity, and MLS:
+a slip floor), plus 2D variants with quadratic B-splines, APIC and J2 plasticity, and MLS,
+Drucker-Prager (2D) and Mohr-Coulomb (3D) variants and an axisymmetric Drucker-Prager billet:
 these run the fused kernels. The general (stored-stencil) kernels run the others:
 GIMP, cubic B-splines with APIC and with MLS, TLMPM with a rigid pusher, an axisymmetric J2
 billet under a rigid platen.
@@ -30,6 +31,8 @@ TOLERANCE = 1e-12
 STEPS = 200
 PLASTIC = {"model": "j2_plasticity", "density": 1000, "youngs_modulus": 1000, "poisson_ratio": 0.3,
            "yield_stress": 5.0, "hardening_modulus": 50.0}
+SOIL = {"density": 1000, "youngs_modulus": 1000, "poisson_ratio": 0.3, "friction_angle": 30.0, "cohesion": 5.0,
+        "dilation_angle": 5.0, "tension_cutoff": 1.0}
 CASES = {
     "2d-musl-linear-flip": scene(SCENE_2D),
     "2d-usl-quadratic-apic-j2": scene(SCENE_2D, method={"scheme": "usl", "shape_function": "quadratic_bspline",
@@ -44,7 +47,13 @@ CASES = {
                                                  "transfer": "mls"}),
     "2d-tlmpm-quadratic-apic-rigid": TLMPM_2D,
     "axisymmetric-j2-billet": AXISYMMETRIC,
+    "2d-musl-linear-flip-drucker-prager": scene(SCENE_2D, materials={"rubber": {**SOIL, "model": "drucker_prager"}}),
+    "3d-musl-linear-flip-mohr-coulomb": scene(SCENE_3D, materials={"rubber": {**SOIL, "model": "mohr_coulomb"}}),
+    "axisymmetric-drucker-prager-billet": scene(AXISYMMETRIC, materials__steel={
+        "model": "drucker_prager", "density": 7800.0, "youngs_modulus": 200e9, "poisson_ratio": 0.3,
+        "friction_angle": 20.0, "cohesion": 0.3e9, "dilation_angle": 10.0}),
 }
+PLASTIC_CASES = ("j2", "drucker-prager", "mohr-coulomb")
 
 
 def run_in_process(case: dict, threads: int):
@@ -65,7 +74,7 @@ def test_two_threads_give_the_one_thread_particles(name):
     assert np.max(np.abs(one["stress"])) > 0
     for field in ("x", "v", "stress"):
         assert relative_difference(one[field], two[field]) <= TOLERANCE, field
-    if "j2" in name:
+    if any(model in name for model in PLASTIC_CASES):
         assert np.max(sim.particles.extra["plastic_strain"]) > 0   # the threaded return mapping ran
 
 

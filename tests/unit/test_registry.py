@@ -150,7 +150,8 @@ class TestRegistration:
         errors = {e["path"]: e["message"] for e in errors_of(stretched_bar())}
         assert errors == {
             "materials.bar.model": "unknown model 'spring'; expected one of 'linear_elastic', 'neo_hookean', "
-                                   "'j2_plasticity', 'johnson_cook', 'fluid', 'ideal_gas', 'rigid'",
+                                   "'j2_plasticity', 'johnson_cook', 'drucker_prager', "
+                                   "'mohr_coulomb', 'fluid', 'ideal_gas', 'rigid'",
             "output.fields[2]": "unknown output field 'spring_strain'; known fields: "
                                 + ", ".join(sorted(capabilities.OUTPUT_FIELDS)),
         }
@@ -192,7 +193,8 @@ class TestBuiltFromTheRegistries:
     def test_output_fields_are_the_fields_module_and_the_materials_state(self):
         assert set(capabilities.OUTPUT_FIELDS) == set(fields.FIELDS) | set(materials.output_fields())
         assert materials.output_fields() == pytest.approx(
-            {"plastic_strain": 0.0, "damage": 0.0, "temperature": math.nan, "internal_energy": 0.0}, nan_ok=True)
+            {"plastic_strain": 0.0, "damage": 0.0, "temperature": math.nan, "yield_state": 0.0, "internal_energy": 0.0},
+            nan_ok=True)
 
     def test_shape_function_values_are_the_registry(self):
         method = Scene.model_json_schema()["$defs"]["Method"]["properties"]["shape_function"]

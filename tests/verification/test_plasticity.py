@@ -7,14 +7,11 @@ Johnson-Cook flow stress, the EOS pressure, the adiabatic temperature of a
 perfectly plastic, thermally softening material, and a rigid rotation.
 """
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from solver import materials
-from solver.scene import J2Plasticity, JohnsonCook
-from solver.state import Particles
+from material_point import MaterialPoint
 
 E, NU, RHO = 200e9, 0.3, 7800.0
 G = E / (2 * (1 + NU))
@@ -28,49 +25,6 @@ CU = {"model": "johnson_cook", "density": 8940.0, "youngs_modulus": 115e9, "pois
       "A": 65e6, "B": 356e6, "n": 0.37, "C": 0.013, "reference_strain_rate": 1.0, "m": 1.09,
       "room_temperature": 298.0, "melt_temperature": 1356.0, "specific_heat": 383.0, "taylor_quinney": 0.0}
 MG = {"model": "mie_gruneisen", "c0": 3933.0, "s": 1.5, "gamma0": 2.0}
-
-
-class MaterialPoint:
-    """One particle of unit reference volume and the material model acting on it."""
-
-    def __init__(self, config, dim=3, temperature=None, rigid_volume=False):
-        schema = J2Plasticity if config["model"] == "j2_plasticity" else JohnsonCook
-        self.config = schema.model_validate(config)
-        eye = np.eye(dim)[None]
-        self.p = Particles(x=np.zeros((1, dim)), v=np.zeros((1, dim)), F=eye.copy(), L=np.zeros((1, dim, dim)),
-                           stress=np.zeros((1, 3, 3)), mass=np.array([self.config.density]),
-                           volume=np.ones(1), volume0=np.ones(1), id=np.zeros(1, np.int64),
-                           body=np.zeros(1, np.int32))
-        self.model = materials.create(self.config, dim)
-        scene = SimpleNamespace(bodies=[SimpleNamespace(initial_temperature=temperature)])
-        materials.init_particles([(self.model, slice(0, 1))], self.p, scene)
-        self.rigid_volume = rigid_volume   # a rigid motion keeps the volume exactly
-
-    def step(self, L, dt):
-        p = self.p
-        p.L[0] = L
-        p.F[0] = (np.eye(len(L)) + dt * np.asarray(L)) @ p.F[0]
-        if not self.rigid_volume:
-            p.volume[0] = np.linalg.det(p.F[0]) * p.volume0[0]
-        self.model.update_stress(p, slice(0, 1), dt)
-
-    @property
-    def stress(self):
-        return self.p.stress[0]
-
-    def state(self, name):
-        return float(self.p.extra[name][0])
-
-    def snapshot(self):
-        return self.p.stress.copy(), {k: a.copy() for k, a in self.p.extra.items()}, self.p.F.copy(), self.p.volume.copy()
-
-    def restore(self, snap):
-        stress, extra, F, volume = snap
-        self.p.stress[:] = stress
-        for k, a in extra.items():
-            self.p.extra[k][:] = a
-        self.p.F[:] = F
-        self.p.volume[:] = volume
 
 
 def von_mises(s):

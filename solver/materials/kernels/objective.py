@@ -102,3 +102,16 @@ def assemble(s, p, sigma):
         for b in range(3):
             sigma[a, b] = s[a, b]
         sigma[a, a] -= p
+
+
+@njit(cache=True)
+def trial_stress(Lp, sigma, dt, K, G, D, W, Q, tmp, s):
+    """The elastic trial of a hypoelastic-plastic step: sigma rotated by the spin of Lp,
+    its deviator s <- s + 2 G dt dev(D); returns the trial pressure p - K tr(D) dt
+    (D, W, Q, tmp: 3x3 scratch)."""
+    rate_tensors(Lp, D, W)
+    rotate(sigma, W, dt, Q, tmp)
+    pressure = split(sigma, s)
+    tr = add_deviatoric_rate(s, D, 2.0 * G * dt)
+    pressure -= K * tr * dt
+    return pressure
