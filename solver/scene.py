@@ -169,6 +169,8 @@ class Method(SceneModel):
     shape_function: Literal[tuple(shape_functions.REGISTRY)] = "linear"
     transfer: Literal["flip", "pic", "apic"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
+    # F-bar (review 5.2, Algorithm 7): the stress from the cell-averaged Jacobian (solver/fbar.py)
+    fbar: Annotated[bool, Strict()] = False
 
     _formulation_supported = supported("formulation", "FORMULATIONS")
 

@@ -19,7 +19,8 @@ calls the method of every hook that has one, in the order the hooks were made
 The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_step),
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `damping`
-(before_update, its work at after_g2p: solver/damping.py).
+(before_update, its work at after_g2p: solver/damping.py), F-bar (after_kinematics,
+after_stress: solver/fbar.py).
 
 A hook that needs the stored stencil (the hoop terms) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 from solver import kernels
 from solver.damping import Damping
+from solver.fbar import FBar
 
 POINTS = ("begin_step", "after_forces", "before_update", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
 
@@ -94,6 +96,10 @@ def _applied_loads(sim):
     return sim.applied_loads
 
 
+def _fbar(sim):
+    return FBar(sim) if sim.scene.method.fbar else None
+
+
 def _damping(sim):
     return Damping(sim.scene.damping) if sim.scene.damping is not None else None
 
@@ -101,8 +107,8 @@ def _damping(sim):
 # Each entry makes the hook a scene needs (or None). The order is the order their effects
 # compose in: rigid bodies impose before the boundary conditions, which win where both
 # apply; the loads' work is counted after the rigid bodies moved; damping acts on the
-# forces of every other hook.
-HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping]
+# forces of every other hook; F-bar averages the volume after the hoop terms changed it.
+HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping, _fbar]
 
 
 def scene_hooks(sim) -> Hooks:

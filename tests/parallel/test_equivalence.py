@@ -29,9 +29,13 @@ CASES = {
     "rigid": scene(RIGID_2D),
     "axisymmetric": scene(AXISYMMETRIC),
     "tlmpm": scene(TLMPM_2D),
+    # F-bar's cell sums cross the slab boundaries (solver/fbar.py)
+    "fbar": scene(SCENE_2D, method__fbar=True),
+    "fbar-tlmpm": scene(TLMPM_2D, method__fbar=True),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
-        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3)]
+        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
+        ("fbar", 2), ("fbar-tlmpm", 3)]
 
 
 @pytest.fixture(scope="module")

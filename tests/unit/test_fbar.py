@@ -1,0 +1,45 @@
+"""F-bar's kernels (solver/fbar.py) on hand-made particles: Algorithm 7 of the review."""
+import numpy as np
+
+from solver.fbar import apply_fbar, cell_sums
+
+
+def _two_cells():
+    """Three particles in cell (0, 0) and one in cell (1, 0) of a 2 x 1 grid of h = 1, and a
+    massless (rigid) particle; each with its own F."""
+    x = np.array([[0.2, 0.3], [0.7, 0.8], [0.5, 0.5], [1.5, 0.5], [0.4, 0.4]])
+    F = np.array([[[1.1, 0.1], [0.0, 1.0]], [[0.9, 0.0], [0.2, 0.95]], [[1.0, 0.0], [0.0, 1.02]],
+                  [[1.2, 0.0], [0.0, 0.9]], [[1.0, 0.0], [0.0, 1.0]]])
+    volume0 = np.array([1.0, 2.0, 1.5, 1.0, 1.0])
+    J = np.linalg.det(F)
+    mass = np.array([1.0, 1.0, 1.0, 1.0, 0.0])
+    return x, F, volume0, J * volume0, mass
+
+
+def test_cell_jacobian_is_the_volume_weighted_mean_and_each_particle_keeps_its_shape():
+    x, F, volume0, volume, mass = _two_cells()
+    strides = np.array([1, 3])                     # 3 x 2 nodes
+    cell = np.empty(5, dtype=np.int64)
+    vol0_cell, vol_cell = np.zeros(6), np.zeros(6)
+    cell_sums(x, np.zeros(2), np.ones(2), np.array([2, 1]), strides, 0, mass, volume, volume0, cell,
+              vol0_cell, vol_cell)
+    assert cell.tolist() == [0, 0, 0, 1, -1]        # lower-corner nodes; the massless one skipped
+    J = volume / volume0
+    J_cell0 = (volume0[:3] * J[:3]).sum() / volume0[:3].sum()      # eq. 5.17
+    L = np.zeros((5, 2, 2))
+    log_ratio = np.zeros(5)
+    F_bar = F.copy()
+    V_bar = volume.copy()
+    dt = 0.01
+    apply_fbar(cell, vol0_cell, vol_cell, dt, F_bar, L, V_bar, volume0, log_ratio)
+    np.testing.assert_allclose(np.linalg.det(F_bar[:3]), J_cell0, rtol=1e-14)
+    np.testing.assert_allclose(np.linalg.det(F_bar[3]), J[3], rtol=1e-14)   # alone in its cell
+    np.testing.assert_allclose(V_bar[:3], J_cell0 * volume0[:3], rtol=1e-14)
+    for p in range(4):   # F_bar = (J_c / J_p)^(1/2) F_p: the isochoric part is the particle's own
+        np.testing.assert_allclose(F_bar[p] / np.sqrt(np.linalg.det(F_bar[p])), F[p] / np.sqrt(J[p]), rtol=1e-13)
+    np.testing.assert_array_equal(F_bar[4], F[4])
+    # L_bar = L + (1/d) d/dt ln(J_c / J_p) I, from the ratio 0 at the start
+    np.testing.assert_allclose(L[:3, 0, 0], np.log(J_cell0 / J[:3]) / (2 * dt), rtol=1e-13)
+    np.testing.assert_allclose(L[:, 0, 0], L[:, 1, 1])
+    assert np.all(L[:, 0, 1] == 0) and L[3, 0, 0] == 0 and L[4, 0, 0] == 0
+    np.testing.assert_allclose(log_ratio[:3], np.log(J_cell0 / J[:3]), rtol=1e-14)
