@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from solver.threads import block_bounds
+
 LOG_RATIO = "fbar_log_ratio"
 
 
@@ -52,10 +54,18 @@ def cell_sums(x, lower, inv_h, cells, strides, offset, mass, volume, volume0, ce
 
 
 @njit(parallel=True, cache=True)
-def apply_fbar(cell, vol0_cell, vol_cell, dt, F, L, volume, volume0, log_ratio):
-    """Algorithm 7, lines 7-12, and the volume and velocity gradient that go with F_bar."""
-    n, d = F.shape[0], F.shape[1]
-    for p in prange(n):
+def apply_fbar(cell, vol0_cell, vol_cell, dt, F, L, volume, volume0, log_ratio, blocks):
+    """Algorithm 7, lines 7-12, and the volume and velocity gradient that go with F_bar,
+    one block of particles per thread (solver/threads.py)."""
+    bounds = block_bounds(F.shape[0], blocks)
+    for t in prange(blocks):
+        _apply_block(bounds[t], bounds[t + 1], cell, vol0_cell, vol_cell, dt, F, L, volume, volume0, log_ratio)
+
+
+@njit(cache=True)
+def _apply_block(start, stop, cell, vol0_cell, vol_cell, dt, F, L, volume, volume0, log_ratio):
+    d = F.shape[1]
+    for p in range(start, stop):
         node = cell[p]
         if node < 0:
             continue
@@ -79,22 +89,30 @@ class FBar:
         n_nodes = sim.grid.n_nodes
         self._vol0_cell = np.zeros(n_nodes)
         self._vol_cell = np.zeros(n_nodes)
+        self._saved = None
         sim.particles.require(LOG_RATIO)
 
     def after_kinematics(self, sim, dt: float, v_grid) -> None:
         p, f = sim.particles, sim.frame
-        self._saved = (p.F.copy(), p.L.copy(), p.volume.copy())
-        cell = np.empty(p.count, dtype=np.int64)
+        if self._saved is None or len(self._saved[0]) != p.count:   # (particles migrated)
+            self._saved = (np.empty_like(p.F), np.empty_like(p.L), np.empty_like(p.volume),
+                           np.empty(p.count, dtype=np.int64))
+        F, L, volume, cell = self._saved
+        np.copyto(F, p.F)
+        np.copyto(L, p.L)
+        np.copyto(volume, p.volume)
         self._vol0_cell.fill(0.0)
         self._vol_cell.fill(0.0)
-        x = sim.formulation.positions(p)
-        cell_sums(x, f.lower, f.inv_h, f.cells, f.strides, f.offset, p.mass, p.volume, p.volume0, cell,
-                  self._vol0_cell, self._vol_cell)
+        cell_sums(sim.formulation.positions(p), f.lower, f.inv_h, f.cells, f.strides, f.offset, p.mass, p.volume,
+                  p.volume0, cell, self._vol0_cell, self._vol_cell)
         sim.domain.sum_ghosts(self._vol0_cell, self._vol_cell)    # cells across slab boundaries
         sim.domain.share_nodes(self._vol0_cell, self._vol_cell)
-        apply_fbar(cell, self._vol0_cell, self._vol_cell, dt, p.F, p.L, p.volume, p.volume0, p.extra[LOG_RATIO])
+        apply_fbar(cell, self._vol0_cell, self._vol_cell, dt, p.F, p.L, p.volume, p.volume0, p.extra[LOG_RATIO],
+                   sim.threads)
 
     def after_stress(self, sim, dt: float) -> None:
         p = sim.particles
-        p.F[...], p.L[...], p.volume[...] = self._saved
-        self._saved = None
+        F, L, volume, _ = self._saved
+        np.copyto(p.F, F)
+        np.copyto(p.L, L)
+        np.copyto(p.volume, volume)

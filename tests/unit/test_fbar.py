@@ -31,7 +31,7 @@ def test_cell_jacobian_is_the_volume_weighted_mean_and_each_particle_keeps_its_s
     F_bar = F.copy()
     V_bar = volume.copy()
     dt = 0.01
-    apply_fbar(cell, vol0_cell, vol_cell, dt, F_bar, L, V_bar, volume0, log_ratio)
+    apply_fbar(cell, vol0_cell, vol_cell, dt, F_bar, L, V_bar, volume0, log_ratio, 2)
     np.testing.assert_allclose(np.linalg.det(F_bar[:3]), J_cell0, rtol=1e-14)
     np.testing.assert_allclose(np.linalg.det(F_bar[3]), J[3], rtol=1e-14)   # alone in its cell
     np.testing.assert_allclose(V_bar[:3], J_cell0 * volume0[:3], rtol=1e-14)
