@@ -24,3 +24,5 @@ class ShapeFunction:
     least_cells: int = 1  # cells per axis the grid needs
     even_cells: bool = False  # its elements span two cells: the grid gets an even number per axis
     end_margin: float = 0.0  # cells a body keeps from the grid ends (no boundary-modified variant)
+    axisymmetric: bool = True  # usable in axisymmetric scenes
+    axisymmetric_refusal: str = ""  # the validation message where it is not

@@ -1,0 +1,78 @@
+"""CPDI-R4's cost per particle-step against linear hats and uGIMP on the same scene:
+docs/benchmarks.md, section "F-bar and CPDI".
+
+    python benchmarks/cpdi.py [--rounds 5] [--steps 40]
+
+Scenes: the E6 unit square (2D, h = 1/32, 2 x 2 particles per cell: 4096 particles)
+and the E6 unit cube (3D, h = 1/8, 2 x 2 x 2 per cell: 4096 particles), ULMPM,
+MUSL, FLIP, all with the general (stored-stencil) backend so that the shape
+function is the only difference (the fused backend, which runs linear scenes by
+default, is timed too, as what a user of `linear` gets). The methods are stepped
+alternately, `rounds` rounds of `steps` steps each; the table gives the best time
+per particle-step of each and its ratio to GIMP's, with the spread of the
+per-round ratios (the machine is shared: the best round is the least disturbed).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from solver.manufactured import Options, cube_scene  # noqa: E402
+from solver.scene import load_scene  # noqa: E402
+from solver.stepper import ExplicitMPM  # noqa: E402
+
+SCENES = {"2D square h=1/32": (2, 1 / 32), "3D cube h=1/8": (3, 1 / 8)}
+METHODS = [("linear", False), ("linear", True), ("gimp", True), ("cpdi_r4", True)]
+
+
+def stepper(dim: int, h: float, shape: str, general: bool) -> tuple[ExplicitMPM, float]:
+    scene = load_scene(cube_scene(dim, h, 0.05, Options(formulation="ulmpm", shape=shape)))
+    sim = ExplicitMPM(scene, general=general)
+    sim.advance(scene.time.dt)   # compile
+    return sim, scene.time.dt
+
+
+def compare(dim: int, h: float, rounds: int, steps: int) -> list[str]:
+    sims = {(shape, general): stepper(dim, h, shape, general) for shape, general in METHODS}
+    best = {key: float("inf") for key in sims}
+    ratios = {key: [] for key in sims}
+    for _ in range(rounds):
+        took = {}
+        for key, (sim, dt) in sims.items():
+            start = time.perf_counter()
+            for _ in range(steps):
+                sim.advance(dt)
+            took[key] = (time.perf_counter() - start) / (steps * sim.particles.count)
+            best[key] = min(best[key], took[key])
+        for key in sims:
+            ratios[key].append(took[key] / took[("gimp", True)])
+    rows = []
+    for (shape, general), (sim, _) in sims.items():
+        key = (shape, general)
+        backend = "general" if general else sim.phases.name
+        rows.append(f"| {shape} ({backend}) | {best[key] * 1e9:.0f} | {best[key] / best[('gimp', True)]:.2f} "
+                    f"| {min(ratios[key]):.2f}-{max(ratios[key]):.2f} |")
+    return rows
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--steps", type=int, default=40)
+    args = parser.parse_args()
+    for name, (dim, h) in SCENES.items():
+        print(f"\n{name}, {args.rounds} rounds of {args.steps} steps\n")
+        print("| shape function (backend) | ns per particle-step, best | / gimp | per-round ratios |")
+        print("|---|---|---|---|")
+        for row in compare(dim, h, args.rounds, args.steps):
+            print(row, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
