@@ -16,11 +16,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from interleaved import round_times  # noqa: E402
 
 from solver.manufactured import Options, cube_scene  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
@@ -39,18 +41,9 @@ def stepper(dim: int, h: float, shape: str, general: bool) -> tuple[ExplicitMPM,
 
 def compare(dim: int, h: float, rounds: int, steps: int) -> list[str]:
     sims = {(shape, general): stepper(dim, h, shape, general) for shape, general in METHODS}
-    best = {key: float("inf") for key in sims}
-    ratios = {key: [] for key in sims}
-    for _ in range(rounds):
-        took = {}
-        for key, (sim, dt) in sims.items():
-            start = time.perf_counter()
-            for _ in range(steps):
-                sim.advance(dt)
-            took[key] = (time.perf_counter() - start) / (steps * sim.particles.count)
-            best[key] = min(best[key], took[key])
-        for key in sims:
-            ratios[key].append(took[key] / took[("gimp", True)])
+    times = round_times(sims, rounds, steps)
+    best = {key: min(t) for key, t in times.items()}
+    ratios = {key: [a / b for a, b in zip(t, times[("gimp", True)])] for key, t in times.items()}
     rows = []
     for (shape, general), (sim, _) in sims.items():
         key = (shape, general)

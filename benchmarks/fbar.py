@@ -18,7 +18,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from interleaved import round_times  # noqa: E402
 from mpm_cases import Case  # noqa: E402
 from test_fbar_column import column_measures, column_scene  # noqa: E402
 
@@ -56,19 +58,11 @@ def cost(rounds: int = 5, steps: int = 200) -> None:
     sims = {fbar: _stepper(fbar) for fbar in (False, True)}
     for sim, dt in sims.values():
         sim.advance(dt)   # compile
-    best = {False: float("inf"), True: float("inf")}
-    ratios = []
-    for _ in range(rounds):
-        took = {}
-        for fbar, (sim, dt) in sims.items():
-            start = time.perf_counter()
-            for _ in range(steps):
-                sim.advance(dt)
-            took[fbar] = time.perf_counter() - start
-            best[fbar] = min(best[fbar], took[fbar])
-        ratios.append(took[True] / took[False])
+    times = round_times(sims, rounds, steps)
+    best = {fbar: min(t) for fbar, t in times.items()}
+    ratios = [a / b for a, b in zip(times[True], times[False])]
     n = sims[False][0].particles.count
-    print(f"{n} particles: without {best[False] / steps * 1e6:.0f} us/step, with {best[True] / steps * 1e6:.0f} "
+    print(f"{n} particles: without {best[False] * n * 1e6:.0f} us/step, with {best[True] * n * 1e6:.0f} "
           f"us/step; ratio of the best {best[True] / best[False]:.3f}, rounds {min(ratios):.3f}-{max(ratios):.3f}")
 
 
