@@ -4,7 +4,7 @@
 
 - The near-incompressible column of tests/verification/test_fbar_column.py
   (poisson_ratio 0.4999) with and without F-bar, for ULMPM (MUSL, USL, USF),
-  TLMPM and GIMP: sigma_yy error and the pressure checkerboard, / rho g H.
+  TLMPM, GIMP, CPDI-R4, and neo-Hookean and J2 (elastic) material: sigma_yy error and the pressure checkerboard, / rho g H.
 - The cost of F-bar: the same scene (the column, 4 x 4 particles per cell) stepped
   with and without it, alternately, 5 rounds of 200 steps; the ratio of the best
   times of each, and the spread of the ratios of the rounds.
@@ -28,17 +28,26 @@ from solver import run  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
-VARIANTS = {"ulmpm musl linear": {}, "ulmpm usl linear": {"scheme": "usl"}, "ulmpm usf linear": {"scheme": "usf"},
-            "tlmpm musl linear": {"formulation": "tlmpm"}, "ulmpm musl gimp": {"shape_function": "gimp"}}
+ELASTIC = {"density": 1000.0, "youngs_modulus": 2.0e5, "poisson_ratio": 0.4999}
+# name: (method keys, material or None for the test's linear_elastic)
+VARIANTS = {"ulmpm musl linear": ({}, None), "ulmpm usl linear": ({"scheme": "usl"}, None),
+            "ulmpm usf linear": ({"scheme": "usf"}, None), "tlmpm musl linear": ({"formulation": "tlmpm"}, None),
+            "ulmpm musl gimp": ({"shape_function": "gimp"}, None),
+            "ulmpm musl cpdi_r4": ({"shape_function": "cpdi_r4"}, None),
+            "neo_hookean, ulmpm musl linear": ({}, {"model": "neo_hookean", **ELASTIC}),
+            "j2_plasticity (yield 1e9), ulmpm musl linear": ({}, {"model": "j2_plasticity", "yield_stress": 1e9,
+                                                                  **ELASTIC})}
 
 
 def accuracy(out: Path) -> None:
     print("| method | F-bar | mean abs(syy + rho g d) | max | bottom row | checkerboard | wall s |")
     print("|---|---|---|---|---|---|---|")
-    for name, method in VARIANTS.items():
+    for name, (method, material) in VARIANTS.items():
         for fbar in (False, True):
             scene = column_scene(fbar)
             scene["method"].update(method)
+            if material is not None:
+                scene["materials"]["m"] = material
             start = time.perf_counter()
             m = column_measures(Case(run(scene, out / f"{name}-{fbar}".replace(" ", "_"))))
             wall = time.perf_counter() - start

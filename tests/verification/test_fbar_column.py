@@ -91,12 +91,21 @@ def test_without_fbar_the_column_locks(columns):
     assert m["mean_syy"] > 10 * columns[True]["mean_syy"]
 
 
+NEO_HOOKEAN = {"model": "neo_hookean", "density": RHO, "youngs_modulus": 2.0e5, "poisson_ratio": NU}
+
+
 @pytest.mark.slow
-def test_fbar_column_tlmpm(tmp_path):
+@pytest.mark.parametrize("formulation,material", [("tlmpm", None), ("ulmpm", NEO_HOOKEAN)],
+                         ids=["tlmpm", "neo_hookean"])
+def test_fbar_column_tlmpm_and_a_material_of_F(tmp_path, formulation, material):
+    """The same bounds with TLMPM, and with a model that reads F (the linear elastic one reads L)."""
     from mpm_cases import Case
 
     from solver import run
-    m = column_measures(Case(run(column_scene(True, "tlmpm"), tmp_path / "run")))
+    scene = column_scene(True, formulation)
+    if material is not None:
+        scene["materials"]["m"] = material
+    m = column_measures(Case(run(scene, tmp_path / "run")))
     assert m["mean_syy"] < 0.025
     assert m["bottom_syy"] < 0.05
     assert m["checkerboard"] < 0.0125
