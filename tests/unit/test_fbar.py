@@ -1,5 +1,6 @@
 """F-bar's kernels (solver/fbar.py) on hand-made particles: Algorithm 7 of the review."""
 import numpy as np
+import pytest
 
 from solver.fbar import apply_fbar, cell_sums
 
@@ -43,3 +44,17 @@ def test_cell_jacobian_is_the_volume_weighted_mean_and_each_particle_keeps_its_s
     np.testing.assert_allclose(L[:, 0, 0], L[:, 1, 1])
     assert np.all(L[:, 0, 1] == 0) and L[3, 0, 0] == 0 and L[4, 0, 0] == 0
     np.testing.assert_allclose(log_ratio[:3], np.log(J_cell0 / J[:3]), rtol=1e-14)
+
+
+def test_fbar_is_a_strict_boolean_off_by_default():
+    from solver.scene import SceneError, load_scene
+    scene = {"version": 1, "name": "s", "dimension": 2, "grid": {"lower": [0, 0], "upper": [1, 1], "cell_size": 0.25},
+             "materials": {"m": {"model": "linear_elastic", "density": 1, "youngs_modulus": 1, "poisson_ratio": 0.3}},
+             "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25, 0.25],
+                                                                   "upper": [0.5, 0.5]}}],
+             "time": {"end": 1.0}}
+    assert load_scene(scene).method.fbar is False
+    scene["method"] = {"fbar": "yes"}
+    with pytest.raises(SceneError) as error:
+        load_scene(scene)
+    assert [e["path"] for e in error.value.errors] == ["method.fbar"]
