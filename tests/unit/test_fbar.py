@@ -58,3 +58,21 @@ def test_fbar_is_a_strict_boolean_off_by_default():
     with pytest.raises(SceneError) as error:
         load_scene(scene)
     assert [e["path"] for e in error.value.errors] == ["method.fbar"]
+
+
+def test_a_run_with_fbar_and_cpdi_stopped_and_resumed_writes_the_same_result(tmp_path, monkeypatch):
+    """F-bar's last ratio ln(J_c / J_p) and CPDI's domains are per-particle state: a resumed
+    run must carry them (bit-for-bit, as tests/unit/test_checkpoint.py explains)."""
+    from test_checkpoint import assert_same_result, column, stop_after   # (it puts tests/ on the path)
+
+    from solver import run, runner
+    scene = column()
+    scene["method"].update(fbar=True, shape_function="cpdi_r4")
+    reference = run(scene, tmp_path / "reference")
+    assert reference.status == "complete"
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
+    assert stopped.status == "partial"
+    resumed = run(scene, tmp_path / "resumed", resume=True)
+    assert (resumed.status, resumed.steps) == ("complete", reference.steps)
+    assert_same_result(reference.result_path, resumed.result_path)
