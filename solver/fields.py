@@ -41,13 +41,16 @@ def through_grid(sim, values: np.ndarray) -> np.ndarray:
 
 
 def _particle_domain(sim) -> np.ndarray:
-    """(n, 2^d * d): the corners of each particle's domain, its seeded box carried by F
-    (CPDI's parallelogram, GIMP's box deformed, for any shape function), corner c at
+    """(n, 2^d * d): the corners of each particle's domain: cpdi_q4's tracked ones, else its
+    seeded box carried by F (CPDI-R4's parallelogram, GIMP's box deformed, for any shape
+    function), corner c at
     x_p + F diag(l0/2) s_c with s_c in {-1, 1}^d, axis 0 fastest: in 2D (x-, y-),
     (x+, y-), (x-, y+), (x+, y+), each as x, y."""
-    from solver.shape.kernels.cpdi import LENGTH, domain_corners   # numba: only runs that write it
+    from solver.shape.kernels.cpdi import CORNERS, LENGTH, domain_corners   # numba: only runs that write it
 
     p = sim.particles
+    if CORNERS in p.extra:   # cpdi_q4's tracked corners, x1 x2 x4 x3 in the order above
+        return p.extra[CORNERS][:, [0, 1, 3, 2]].reshape(p.count, -1)
     length = p.extra.get(LENGTH)
     if length is None:
         length = box_sides(sim.scene, p.body)

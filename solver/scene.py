@@ -740,6 +740,8 @@ def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
     declared = shape_functions.REGISTRY[name]
     if scene.axisymmetric and not declared.axisymmetric:
         return [("method.shape_function", declared.axisymmetric_refusal)]
+    if scene.dimension not in declared.dimensions:
+        return [("method.shape_function", declared.dimension_refusal)]
     if min(scene.grid_shape()) < declared.least_cells:
         return [("grid.cell_size", f"{name!r} needs at least {declared.least_cells} cells per axis, "
                                    f"the grid has {list(scene.grid_shape())}")]

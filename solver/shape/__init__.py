@@ -64,7 +64,8 @@ def get(name: str) -> SimpleNamespace:
         raise ValueError(f"shape function {name!r} is not implemented; known: {sorted(REGISTRY)}") from None
     module = import_module(declared.kernels)
     functions = {"weights": module.weights, "prepare": getattr(module, "prepare", None),
-                 "evaluate": getattr(module, declared.evaluate, None), "failure": getattr(module, "failure", None)}
+                 "evaluate": getattr(module, declared.evaluate, None), "failure": getattr(module, "failure", None),
+                 "hook": getattr(module, declared.hook, None) if declared.hook else None}
     return SimpleNamespace(__name__=f"{module.__name__}:{name}", SUPPORT=declared.support,
                            **{key: f for key, f in functions.items() if f is not None})
 

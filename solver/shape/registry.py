@@ -26,3 +26,6 @@ class ShapeFunction:
     end_margin: float = 0.0  # cells a body keeps from the grid ends (no boundary-modified variant)
     axisymmetric: bool = True  # usable in axisymmetric scenes
     axisymmetric_refusal: str = ""  # the validation message where it is not
+    dimensions: frozenset[int] = frozenset({1, 2, 3})  # the scene dimensions it has
+    dimension_refusal: str = ""  # the validation message for the others
+    hook: str = ""  # the kernel module's factory of a step hook it needs (cpdi_q4: its corners move), or none

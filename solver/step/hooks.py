@@ -20,7 +20,7 @@ The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_st
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), F-bar (after_kinematics,
-after_stress: solver/fbar.py).
+after_stress: solver/fbar.py), a shape function's own (cpdi_q4's corners, after_g2p).
 
 A hook that needs the stored stencil (the hoop terms) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
@@ -100,6 +100,11 @@ def _fbar(sim):
     return FBar(sim) if sim.scene.method.fbar else None
 
 
+def _shape_hook(sim):
+    make = getattr(sim.shape, "hook", None)   # cpdi_q4: its tracked corners move (solver/shape/kernels/cpdi.py)
+    return make(sim) if make is not None else None
+
+
 def _damping(sim):
     return Damping(sim.scene.damping) if sim.scene.damping is not None else None
 
@@ -108,7 +113,7 @@ def _damping(sim):
 # compose in: rigid bodies impose before the boundary conditions, which win where both
 # apply; the loads' work is counted after the rigid bodies moved; damping acts on the
 # forces of every other hook; F-bar averages the volume after the hoop terms changed it.
-HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping, _fbar]
+HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _damping, _fbar, _shape_hook]
 
 
 def scene_hooks(sim) -> Hooks:

@@ -114,7 +114,7 @@ def test_e28_a_domain_wider_than_the_stencil_is_reported_naming_its_size():
     assert outside == 0
     particles = SimpleNamespace(F=F, extra={"domain_length": np.repeat(grid.h[None] / 2, 2, axis=0)})
     quantity, detail = shape.failure(module, x, particles, grid, 0)
-    assert quantity == "particle domain (cpdi_r4)" and "spans [4." in detail
+    assert quantity == "particle domain (cpdi)" and "spans [4." in detail
     assert evaluate("cpdi_r4", x[1:], grid, F[1:])[0] == -1
     outside_grid = x.copy()
     outside_grid[0, 0] = grid.lower[0] - 0.1
@@ -154,3 +154,64 @@ def test_particle_domain_field_is_the_seeded_box_carried_by_F():
     half = 0.25 / 2 / 2
     for c, (sx, sy) in enumerate([(-1, -1), (1, -1), (-1, 1), (1, 1)]):
         np.testing.assert_allclose(corners[:, c], p.x + np.array([1.5 * sx + 0.2 * sy, 0.8 * sy]) * half, atol=1e-15)
+
+
+def _evaluate_q4(x, corners, grid):
+    module = shape.get("cpdi_q4")
+    stencil = make_stencil(len(x), 2, 4)
+    particles = SimpleNamespace(extra={"domain_corners": np.ascontiguousarray(corners)})
+    outside = shape.evaluate(module, kernels.stencil_spec(2, 16), np.ascontiguousarray(x), particles, grid, stencil)
+    return outside, stencil
+
+
+def test_q4_on_a_parallelogram_is_r4():
+    """A quadrilateral that is a parallelogram has a = b = 0 in eq. 3.36: the weights are
+    1/4 each and eq. 3.37 is eq. 3.32, so Q4 and R4 agree (to round-off)."""
+    from solver.shape.kernels.cpdi import domain_corners
+    rng = np.random.default_rng(17)
+    grid = make_grid(2)
+    x = _inside(grid, 100, rng, 1.0)
+    F = _random_F(len(x), 2, rng)
+    corners = domain_corners(x, np.repeat(grid.h[None] / 2, len(x), axis=0), F)[:, [0, 1, 3, 2]]   # counter-clockwise
+    _, r4 = evaluate("cpdi_r4", x, grid, F)
+    outside, q4 = _evaluate_q4(x, corners, grid)
+    assert outside == -1
+    np.testing.assert_array_equal(q4.idx, r4.idx)
+    np.testing.assert_allclose(q4.w, r4.w, atol=1e-13)
+    np.testing.assert_allclose(q4.dw, r4.dw, atol=1e-11 * np.max(grid.inv_h))
+
+
+def test_q4_on_random_quadrilaterals_reproduces_the_centroid_and_linear_gradients():
+    """For a general convex quadrilateral: weights sum to 1 and gradients to 0, sum_I phi_I x_I
+    is the domain's centroid (the weights average the hats over the domain, eq. 3.36; the
+    spec checked them against the exact integrals) and sum_I x_I (x) grad phi_I = I."""
+    rng = np.random.default_rng(23)
+    grid = make_grid(2)
+    x = _inside(grid, 200, rng, 1.0)
+    square = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
+    corners = x[:, None, :] + (square[None] + rng.uniform(-0.3, 0.3, size=(len(x), 4, 2))) * grid.h / 4
+    outside, s = _evaluate_q4(x, corners, grid)
+    assert outside == -1
+    nodes = grid.node_positions()[s.idx]
+    np.testing.assert_allclose(s.w.sum(axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(s.dw.sum(axis=1), 0.0, atol=1e-11 * np.max(grid.inv_h))
+    np.testing.assert_allclose(np.einsum("pka,pkb->pab", nodes, s.dw),
+                               np.broadcast_to(np.eye(2), (len(x), 2, 2)), atol=1e-11)
+    # the centroid of each quadrilateral, from its two triangles
+    a, b, c, d = (corners[:, i] for i in range(4))
+    def cross(u, v):
+        return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    area1, area2 = 0.5 * np.abs(cross(b - a, c - a)), 0.5 * np.abs(cross(c - a, d - a))
+    centroid = ((a + b + c) / 3 * area1[:, None] + (a + c + d) / 3 * area2[:, None]) / (area1 + area2)[:, None]
+    np.testing.assert_allclose(np.einsum("pk,pka->pa", s.w, nodes), centroid, atol=1e-12)
+
+
+def test_q4_is_refused_outside_2d():
+    from solver.scene import SceneError, load_scene
+    scene = _scene(shape_function="cpdi_q4")
+    load_scene(scene)
+    scene.update(dimension=3, grid={"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.25})
+    scene["bodies"][0]["geometry"] = {"type": "box", "lower": [0.25] * 3, "upper": [0.5] * 3}
+    with pytest.raises(SceneError) as error:
+        load_scene(scene)
+    assert any(e["path"] == "method.shape_function" and "2D" in e["message"] for e in error.value.errors)

@@ -66,6 +66,6 @@ def test_e28_a_domain_too_large_for_the_stencil_stops_the_run_naming_the_particl
     stretch and finish."""
     one = run_case(stretched_bar(1), "ppc1").result
     assert one.status == "partial" and one.reason == "unstable"
-    assert "particle domain (cpdi_r4) of particle" in one.message and "cells per axis" in one.message
+    assert "particle domain (cpdi) of particle" in one.message and "cells per axis" in one.message
     two = run_case(stretched_bar(2), "ppc2").result
     assert two.status == "complete", two.message
