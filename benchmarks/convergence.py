@@ -75,14 +75,14 @@ CASES = [
          [0.1, 0.05, 1 / 30], [0.1, 0.05], 1.0),
 ]
 
-SHAPES = ["linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein"]
+SHAPES = ["linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein", "cpdi_r4"]
 QUICK_SHAPES = ["linear", "cubic_bspline", "bernstein"]
 
 
-def methods(quick: bool) -> list[Options]:
+def methods(quick: bool, shapes: list[str] | None = None) -> list[Options]:
     out = []
     for formulation in ("ulmpm", "tlmpm"):
-        for shape in QUICK_SHAPES if quick else SHAPES:
+        for shape in shapes or (QUICK_SHAPES if quick else SHAPES):
             for transfer in ("flip",) if quick else ("flip", "apic", "mls"):
                 out.append(Options(formulation=formulation, shape=shape, transfer=transfer))
     return out
@@ -183,13 +183,14 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="2-3 coarse levels, FLIP, linear/cubic/Bernstein")
     parser.add_argument("--cases", nargs="*", default=[c.name for c in CASES], help="segment square vortex")
     parser.add_argument("--no-plots", action="store_true")
+    parser.add_argument("--shapes", nargs="*", help="only these shape functions (e.g. cpdi_r4 gimp)")
     args = parser.parse_args()
     started = time.perf_counter()
     images = ROOT / "docs" / "images"
     for case in (c for c in CASES if c.name in args.cases):
         levels = case.quick_levels if args.quick else case.levels
         results = {}
-        for options in methods(args.quick):
+        for options in methods(args.quick, args.shapes):
             results[label(options)] = measure(case, options, levels)
             print(f"  {case.name}: {label(options)} done ({time.perf_counter() - started:.0f} s)",
                   file=sys.stderr, flush=True)

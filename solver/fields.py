@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from solver import materials, shape
+from solver.seeding import box_sides
 from solver.state import make_stencil
 
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))   # xx yy zz yz xz xy
@@ -37,6 +38,23 @@ def through_grid(sim, values: np.ndarray) -> np.ndarray:
     node_sum = np.bincount(s.idx.ravel(), (mw * values[:, None]).ravel(), minlength=g.n_nodes)
     node_value = np.divide(node_sum, node_mass, out=np.zeros_like(node_sum), where=node_mass > 0)
     return (s.w * node_value[s.idx]).sum(axis=1)
+
+
+def _particle_domain(sim) -> np.ndarray:
+    """(n, 2^d * d): the corners of each particle's domain: cpdi_q4's tracked ones, else its
+    seeded box carried by F (CPDI-R4's parallelogram, GIMP's box deformed, for any shape
+    function), corner c at
+    x_p + F diag(l0/2) s_c with s_c in {-1, 1}^d, axis 0 fastest: in 2D (x-, y-),
+    (x+, y-), (x-, y+), (x+, y+), each as x, y."""
+    from solver.shape.kernels.cpdi import CORNERS, LENGTH, domain_corners   # numba: only runs that write it
+
+    p = sim.particles
+    if CORNERS in p.extra:   # cpdi_q4's tracked corners, x1 x2 x4 x3 in the order above
+        return p.extra[CORNERS][:, [0, 1, 3, 2]].reshape(p.count, -1)
+    length = p.extra.get(LENGTH)
+    if length is None:
+        length = box_sides(sim.scene, p.body)
+    return domain_corners(p.x, length, p.F).reshape(p.count, -1)
 
 
 def _strain_energy_density(sim) -> np.ndarray:
@@ -77,6 +95,7 @@ FIELDS = {
     "deformation_gradient": lambda sim: sim.particles.F.reshape(sim.particles.count, -1),
     "strain_energy_density": _strain_energy_density,
     "heat_flux": _heat_flux,
+    "particle_domain": _particle_domain,
 }
 """The fields of every scene; the materials add their state's (plastic_strain, damage,
 temperature, internal_energy, ...: solver.materials.output_fields)."""

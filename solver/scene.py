@@ -175,6 +175,8 @@ class Method(SceneModel):
     shape_function: Literal[tuple(shape_functions.REGISTRY)] = "linear"
     transfer: Literal["flip", "pic", "apic", "mls"] = "flip"
     flip_ratio: Annotated[float, Strict(), Field(ge=0, le=1)] = 0.99
+    # F-bar (review 5.2, Algorithm 7): the stress from the cell-averaged Jacobian (solver/fbar.py)
+    fbar: Annotated[bool, Strict()] = False
 
     _formulation_supported = supported("formulation", "FORMULATIONS")
 
@@ -959,6 +961,10 @@ def _shape_function_problems(scene: Scene) -> list[tuple[str, str]]:
     particle within h/2 of a grid end would need a node beyond it)."""
     name = scene.method.shape_function
     declared = shape_functions.REGISTRY[name]
+    if scene.axisymmetric and not declared.axisymmetric:
+        return [("method.shape_function", declared.axisymmetric_refusal)]
+    if scene.dimension not in declared.dimensions:
+        return [("method.shape_function", declared.dimension_refusal)]
     if min(scene.grid_shape()) < declared.least_cells:
         return [("grid.cell_size", f"{name!r} needs at least {declared.least_cells} cells per axis, "
                                    f"the grid has {list(scene.grid_shape())}")]

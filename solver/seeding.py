@@ -83,6 +83,14 @@ def particle_volume(scene: Scene, body: Body) -> float:
     return math.prod(scene.cell_sizes()) / body.particles_per_cell ** scene.dimension
 
 
+def box_sides(scene: Scene, body_index: np.ndarray) -> np.ndarray:
+    """(n, dim): the sides of the box each particle was seeded as, h / particles_per_cell of
+    its body per axis (regular seeding tiles each cell with ppc boxes per axis; a curved
+    body's boundary particles keep their whole box). GIMP's boxes and CPDI's domains at t = 0."""
+    ppc = np.array([b.particles_per_cell for b in scene.bodies], dtype=np.float64)
+    return np.asarray(scene.cell_sizes())[None, :] / ppc[body_index][:, None]
+
+
 def candidate_cells(scene: Scene, body: Body) -> list[tuple[int, int]]:
     """Per axis, the range [first, stop) of the grid cells that overlap the body's
     bounding box: arithmetic only, whatever the sizes."""

@@ -29,7 +29,9 @@ A function that needs per-particle data (GIMP's particle sizes) also provides
 `prepare(scene, particles)`, which allocates it in `Particles.extra`, and
 `evaluate(spec, x, particles, grid, stencil, blocks)`, which calls its kernel with it.
 Callers use the module-level `prepare` and `evaluate` below, which fall back to
-the plain kernel.
+the plain kernel. A function that may refuse a particle inside the grid (CPDI: a
+domain larger than its stencil) provides `failure(x, particles, grid, index)`,
+the diagnostic the step reports instead of "outside the grid".
 """
 from __future__ import annotations
 
@@ -40,11 +42,11 @@ import numpy as np
 
 from solver.shape.registry import ShapeFunction
 
-__all__ = ["BUILTIN", "REGISTRY", "ShapeFunction", "evaluate", "get", "prepare"]
+__all__ = ["BUILTIN", "REGISTRY", "ShapeFunction", "evaluate", "failure", "get", "prepare"]
 
 # The declaration modules, in the order the scene lists the names (its error
 # messages and JSON schema enumerate them in this order).
-BUILTIN = ("linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein")
+BUILTIN = ("linear", "gimp", "cubic_bspline", "quadratic_bspline", "bernstein", "cpdi")
 
 REGISTRY: dict[str, ShapeFunction] = {
     declared.name: declared
@@ -62,7 +64,8 @@ def get(name: str) -> SimpleNamespace:
         raise ValueError(f"shape function {name!r} is not implemented; known: {sorted(REGISTRY)}") from None
     module = import_module(declared.kernels)
     functions = {"weights": module.weights, "prepare": getattr(module, "prepare", None),
-                 "evaluate": getattr(module, declared.evaluate, None)}
+                 "evaluate": getattr(module, declared.evaluate, None), "failure": getattr(module, "failure", None),
+                 "hook": getattr(module, declared.hook, None) if declared.hook else None}
     return SimpleNamespace(__name__=f"{module.__name__}:{name}", SUPPORT=declared.support,
                            **{key: f for key, f in functions.items() if f is not None})
 
@@ -71,6 +74,16 @@ def prepare(module, scene, particles) -> None:
     """Allocate the per-particle data the function needs (nothing for most)."""
     if hasattr(module, "prepare"):
         module.prepare(scene, particles)
+
+
+def failure(module, x: np.ndarray, particles, grid, index: int) -> tuple[str, str] | None:
+    """Why the weights refused particle `index` when its position is inside the grid
+    (a function whose stencil may not reach, CPDI's large domains): (quantity, detail);
+    None for a particle outside the grid (the caller says so). `grid`: the whole grid's
+    lower, inv_h and cells."""
+    if hasattr(module, "failure"):
+        return module.failure(x, particles, grid, index)
+    return None
 
 
 def evaluate(module, spec, x: np.ndarray, particles, grid, stencil) -> int:

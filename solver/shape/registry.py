@@ -27,3 +27,8 @@ class ShapeFunction:
     least_cells: int = 1  # cells per axis the grid needs
     even_cells: bool = False  # its elements span two cells: the grid gets an even number per axis
     end_margin: float = 0.0  # cells a body keeps from the grid ends (no boundary-modified variant)
+    axisymmetric: bool = True  # usable in axisymmetric scenes
+    axisymmetric_refusal: str = ""  # the validation message where it is not
+    dimensions: frozenset[int] = frozenset({1, 2, 3})  # the scene dimensions it has
+    dimension_refusal: str = ""  # the validation message for the others
+    hook: str = ""  # the kernel module's factory of a step hook it needs (cpdi_q4: its corners move), or none

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import kernels
+from solver import kernels, shape
 from solver.state import make_stencil
 from solver.step.phases import Phases
 
@@ -36,6 +36,10 @@ class GeneralPhases(Phases):
         x = sim.formulation.positions(p)
         outside = sim.domain.weights(sim.shape, sim.spec, x, p, sim.grid, sim.stencil)   # this process's node numbers
         if outside >= 0:
+            told = shape.failure(sim.shape, x, p, sim.frame, outside)   # (whole-grid frame)
+            if told is not None:
+                sim.fail(outside, *told)
+                return
             quantity, detail = sim.formulation.outside
             sim.fail(outside, quantity, detail.format(where=np.array2string(x[outside], precision=6)))
         if sim.affine is not None:

@@ -21,7 +21,9 @@ boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `absorbing`
 boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
-after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress).
+after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress),
+F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (cpdi_q4's
+corners, after_g2p).
 
 A hook that needs the stored stencil (the hoop terms, conduction) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
@@ -34,6 +36,7 @@ from solver import kernels
 from solver.absorbing import AbsorbingFaces
 from solver.damping import Damping
 from solver.thermal import make_conduction, make_expansion
+from solver.fbar import FBar
 
 POINTS = ("begin_step", "after_forces", "before_update", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
 
@@ -103,6 +106,15 @@ def _absorbing_faces(sim):
     return AbsorbingFaces(sim.scene, sim.grid) if absorbing else None
 
 
+def _fbar(sim):
+    return FBar(sim) if sim.scene.method.fbar else None
+
+
+def _shape_hook(sim):
+    make = getattr(sim.shape, "hook", None)   # cpdi_q4: its tracked corners move (solver/shape/kernels/cpdi.py)
+    return make(sim) if make is not None else None
+
+
 def _damping(sim):
     return Damping(sim.scene.damping) if sim.scene.damping is not None else None
 
@@ -110,9 +122,10 @@ def _damping(sim):
 # Each entry makes the hook a scene needs (or None). The order is the order their effects
 # compose in: rigid bodies impose before the boundary conditions, which win where both
 # apply; the loads' work is counted after the rigid bodies moved; damping acts on the
-# forces of every other hook.
+# forces of every other hook; F-bar averages the volume after the hoop terms changed it and
+# puts the particles' own F, L and V back after every other stress hook.
 HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _absorbing_faces, _damping,
-         make_conduction, make_expansion]
+         make_conduction, make_expansion, _fbar, _shape_hook]
 
 
 def scene_hooks(sim) -> Hooks:

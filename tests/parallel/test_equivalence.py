@@ -30,9 +30,16 @@ CASES = {
     "axisymmetric": scene(AXISYMMETRIC),
     "tlmpm": scene(TLMPM_2D),
     "heat": scene(HEAT_2D),
+    # F-bar's cell sums cross the slab boundaries (solver/fbar.py)
+    "fbar": scene(SCENE_2D, method__fbar=True),
+    "fbar-tlmpm": scene(TLMPM_2D, method__fbar=True),
+    # CPDI's 4-node stencil and deformed domains across the slab boundaries
+    "cpdi": scene(SCENE_2D, method__shape_function="cpdi_r4"),
+    "cpdi-q4": scene(SCENE_2D, method__shape_function="cpdi_q4"),   # tracked corners migrate with particles
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
+        ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2),
         ("heat", 2), ("heat", 3)]
 
 

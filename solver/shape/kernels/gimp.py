@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from solver.seeding import box_sides
 from solver.shape.kernels import tensor
 
 
@@ -36,13 +37,11 @@ LENGTH = "domain_length"   # Particles.extra: (n, dim) initial box sides l_p0
 
 
 def prepare(scene, particles) -> None:
-    """Allocate the initial box sides, h / particles_per_cell of each particle's body
-    (regular seeding tiles each cell with ppc boxes per axis)."""
+    """Allocate the initial box sides, h / particles_per_cell of each particle's body."""
     if LENGTH in particles.extra:      # restored from a checkpoint
         return
     length = particles.require(LENGTH, (scene.dimension,))
-    ppc = np.array([b.particles_per_cell for b in scene.bodies], dtype=np.float64)
-    length[:] = np.asarray(scene.cell_sizes())[None, :] / ppc[particles.body][:, None]
+    length[:] = box_sides(scene, particles.body)
 
 
 def evaluate(spec, x, particles, grid, stencil, blocks) -> int:

@@ -1,0 +1,300 @@
+"""CPDI-R4 (review 3.6.2-3.6.3, eqs. 3.27-3.35; Sadeghirad et al. 2011), in 1D (CPDI-L2,
+eq. 3.26), 2D and 3D.
+
+A particle's domain is the box of side l0 = h / particles_per_cell per axis it had
+when seeded (the same box as GIMP's, solver/shape/kernels/gimp.py), carried by F:
+the parallelogram (parallelepiped) x_p + R xi, xi in [-1, 1]^d, R = F diag(l0 / 2)
+(the columns of R are the review's half-length domain vectors r_i, eq. 3.27).
+The weight of node I is the mean of the hat function over the domain with the hat
+replaced by its interpolant on the corners x_c = x_p + R s_c (s_c in {-1, 1}^d):
+
+    phi_I      = 2^-d sum_c N_I(x_c)                                   (eq. 3.32)
+    grad phi_I = sum_c N_I(x_c) g_c,  g_c = 2^-d R^-T s_c              (eq. 3.32)
+
+g_c is the mean over the domain of the gradient of the corner's multilinear
+function (the review's 2D expression written for any d: the affine map makes the
+mean of d/dxi_a of prod_b (1 + s_cb xi_b) / 2 equal to s_ca / 2^d). The weights
+sum to 1 and the gradients to 0 (eq. 3.33); a linear field's gradient is
+reproduced exactly.
+
+The stencil is the 4 nodes per axis from the node below the particle's cell
+(cells i-1, i, i+1 around the particle's cell i, nearer the grid ends shifted
+inwards): corners up to one cell either side. A corner beyond that (a domain
+stretched over more than the three cells, where CPDI develops the holes of
+review 3.7 / spec E28) stops the run naming the particle: `failure` tells it
+apart from a particle outside the grid. A corner beyond a grid end is moved onto
+it (review 3.7: "GIMP/CPDI need ghost cells"; here, as GIMP's boxes are cut), so
+the weights keep their partition of unity at walls, at the price of linear
+reproduction for that particle.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from solver.shape.kernels import gimp
+from solver.shape.kernels.gimp import LENGTH  # the seeded boxes: the domains at t = 0
+from solver.kernels import invert
+from solver.threads import block_bounds, first_of
+
+SUPPORT = 4
+CORNERS = "domain_corners"   # Particles.extra (n, 4, 2): cpdi_q4's tracked corners, counter-clockwise
+SQUARE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])   # x1..x4 of review eq. 3.34
+
+
+def prepare(scene, particles) -> None:
+    """The seeded boxes (both), and cpdi_q4's corners: the boxes' corners at t = 0."""
+    gimp.prepare(scene, particles)
+    if scene.method.shape_function != "cpdi_q4" or CORNERS in particles.extra:   # (restored from a checkpoint)
+        return
+    corners = particles.require(CORNERS, (4, 2))
+    corners[:] = particles.x[:, None, :] + 0.5 * particles.extra[LENGTH][:, None, :] * SQUARE[None]
+
+
+def evaluate(spec, x, particles, grid, stencil, blocks) -> int:
+    return weights(spec, x, particles.extra[LENGTH], particles.F, grid.lower, grid.inv_h, grid.cells, grid.strides,
+                   stencil.idx, stencil.w, stencil.dw, blocks)
+
+
+def evaluate_tracked(spec, x, particles, grid, stencil, blocks) -> int:
+    """cpdi_q4: the tracked corners."""
+    return weights_tracked(spec, x, particles.extra[CORNERS], grid.lower, grid.inv_h, grid.cells, grid.strides,
+                           stencil.idx, stencil.w, stencil.dw, blocks)
+
+
+def failure(x, particles, grid, index):
+    """(quantity, detail) for a particle the weights refused whose centre is inside the
+    grid (its domain is too large), None for one outside the grid."""
+    s = (x[index] - grid.lower) * grid.inv_h
+    if not np.all((s >= 0) & (s <= grid.cells)):
+        return None
+    if CORNERS in particles.extra:
+        corners = particles.extra[CORNERS][index]
+    else:
+        corners = domain_corners(x[index:index + 1], particles.extra[LENGTH][index:index + 1],
+                                 particles.F[index:index + 1])[0]
+    extent = (corners.max(axis=0) - corners.min(axis=0)) * grid.inv_h
+    return ("particle domain (cpdi)",
+            f"spans {np.array2string(extent, precision=3)} cells per axis and reaches beyond the cells next to "
+            "its own, which its stencil covers (larger domains leave holes in CPDI's weights, review 3.7): a "
+            "domain is h / particles_per_cell stretched by F, so seed more particles per cell, or use a shape "
+            "function without domains ('gimp', 'cubic_bspline'); a cpdi_q4 domain may also have folded")
+
+
+def domain_corners(x, length, F) -> np.ndarray:
+    """(n, 2^d, d): the corners x_p + F diag(l0/2) s_c, s_c in {-1, 1}^d with axis 0 fastest
+    (2D: the review's x1, x2, x4, x3; the `particle_domain` output field)."""
+    n, d = x.shape
+    signs = np.array([[1.0 if (c >> a) & 1 else -1.0 for a in range(d)] for c in range(2 ** d)])
+    R = F[:, :d, :d] * (0.5 * length)[:, None, :]
+    return x[:, None, :] + np.einsum("pab,cb->pca", R, signs)
+
+
+@njit(parallel=True, cache=True)
+def weights(spec, x, length, F, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    """CPDI-R4: the domains carried by F (`length` the seeded box sides)."""
+    dims, nodes = spec
+    if SUPPORT ** len(dims) != len(nodes):
+        raise ValueError("cpdi: the stencil is not 4 nodes per axis")
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _carried_block(dims, nodes, bounds[t], bounds[t + 1], x, length, F, lower, inv_h, cells, strides,
+                                idx, w, dw)
+    return first_of(bad)
+
+
+@njit(cache=True)
+def _carried_block(dims, nodes, start, stop, x, length, F, lower, inv_h, cells, strides, idx, w, dw):
+    dim = len(dims)
+    corners = 2 ** dim
+    base = np.empty(dim, dtype=np.int64)
+    R = np.empty((dim, dim))        # the half-length domain vectors as columns, in cell units
+    Rinv = np.empty((dim, dim))
+    at = np.empty((corners, dim))   # the corners, in cells from the grid's lower end
+    wf = np.full(corners, 1.0 / corners)
+    gw = np.empty((corners, dim))   # the corners' gradient weights, per length
+    for p in range(start, stop):
+        if not _first_nodes(p, x, lower, inv_h, cells, base):
+            return p
+        for a in range(dim):
+            for b in range(dim):
+                R[a, b] = F[p, a, b] * 0.5 * length[p, b] * inv_h[a]
+        if invert(R, Rinv) <= 0.0:   # an inverted domain (the step reports its J)
+            return p
+        for c in range(corners):
+            for a in range(dim):
+                s = (x[p, a] - lower[a]) * inv_h[a]
+                g = 0.0
+                for b in range(dim):
+                    sign = 1.0 if (c >> b) & 1 else -1.0
+                    s += R[a, b] * sign
+                    g += Rinv[b, a] * sign   # g_c = 2^-d R^-T s_c; R in cells: d/dx_a = inv_h[a] d/ds_a
+                at[c, a] = s
+                gw[c, a] = g * inv_h[a] / corners
+        if not _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
+            return p
+    return -1
+
+
+@njit(cache=True)
+def _first_nodes(p, x, lower, inv_h, cells, base):
+    """The stencil's first node per axis: the node below the particle's cell (shifted
+    inwards at the grid ends); False for a particle outside the grid (or NaN)."""
+    for a in range(x.shape[1]):
+        s = (x[p, a] - lower[a]) * inv_h[a]
+        if not (s >= 0.0 and s <= cells[a]):
+            return False
+        base[a] = min(max(min(int(s), cells[a] - 1) - 1, 0), cells[a] - 3)
+    return True
+
+
+@njit(cache=True)
+def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
+    """phi_I = sum_c wf_c N_I(x_c) and grad phi_I = sum_c gw_c N_I(x_c) on the stencil from
+    `base`, the corners `at` (in cells) moved onto the grid; False where a corner lies
+    outside the stencil's three cells per axis."""
+    corners, dim = at.shape
+    nk = len(nodes)
+    first = np.empty(dim, dtype=np.int64)
+    w1 = np.empty((dim, 2))
+    for k in range(nk):
+        w[p, k] = 0.0
+        node = 0
+        rest = k
+        for a in range(dim):
+            dw[p, k, a] = 0.0
+            node += (base[a] + rest % SUPPORT) * strides[a]
+            rest //= SUPPORT
+        idx[p, k] = node
+    for c in range(corners):
+        for a in range(dim):   # the corner's cell and its hat weights
+            s = min(max(at[c, a], 0.0), float(cells[a]))
+            i = min(int(s), cells[a] - 1)
+            if i < base[a] or i > base[a] + 2:
+                return False
+            first[a] = i - base[a]
+            w1[a, 1] = s - i
+            w1[a, 0] = 1.0 - w1[a, 1]
+        for j in range(2 ** dim):   # the 2^d nodes of the corner's cell
+            k = 0
+            stride = 1
+            N = 1.0
+            for a in range(dim):
+                bit = (j >> a) & 1
+                k += (first[a] + bit) * stride
+                stride *= SUPPORT
+                N *= w1[a, bit]
+            w[p, k] += N * wf[c]
+            for a in range(dim):
+                dw[p, k, a] += N * gw[c, a]
+    return True
+
+
+# --------------------------------------------------------------------------- CPDI-Q4
+
+@njit(parallel=True, cache=True)
+def weights_tracked(spec, x, corners, lower, inv_h, cells, strides, idx, w, dw, blocks):
+    """CPDI-Q4 (review eqs. 3.36-3.37, the sign of eq. 3.37 corrected as the spec says): the
+    weights of a quadrilateral from its four tracked corners."""
+    dims, nodes = spec
+    if SUPPORT ** len(dims) != len(nodes) or len(dims) != 2:
+        raise ValueError("cpdi_q4: 2D, 4 nodes per axis")
+    bounds = block_bounds(x.shape[0], blocks)
+    bad = np.empty(blocks, dtype=np.int64)
+    for t in prange(blocks):
+        bad[t] = _tracked_block(nodes, bounds[t], bounds[t + 1], x, corners, lower, inv_h, cells, strides,
+                                idx, w, dw)
+    return first_of(bad)
+
+
+@njit(cache=True)
+def _tracked_block(nodes, start, stop, x, corners, lower, inv_h, cells, strides, idx, w, dw):
+    base = np.empty(2, dtype=np.int64)
+    at = np.empty((4, 2))
+    wf = np.empty(4)
+    gw = np.empty((4, 2))
+    for p in range(start, stop):
+        if not _first_nodes(p, x, lower, inv_h, cells, base):
+            return p
+        q = corners[p]
+        x1, y1, x2, y2, x3, y3, x4, y4 = q[0, 0], q[0, 1], q[1, 0], q[1, 1], q[2, 0], q[2, 1], q[3, 0], q[3, 1]
+        V = 0.5 * ((x1 * y2 - x2 * y1) + (x2 * y3 - x3 * y2) + (x3 * y4 - x4 * y3) + (x4 * y1 - x1 * y4))
+        if not V > 0.0:      # folded or inverted quadrilateral (also NaN)
+            return p
+        a = (x4 - x1) * (y2 - y3) - (x2 - x3) * (y4 - y1)
+        b = (x3 - x4) * (y1 - y2) - (x1 - x2) * (y3 - y4)
+        wf[0], wf[1] = (6 * V - a - b) / (24 * V), (6 * V - a + b) / (24 * V)
+        wf[2], wf[3] = (6 * V + a + b) / (24 * V), (6 * V + a - b) / (24 * V)
+        gw[0, 0], gw[0, 1] = (y2 - y4) / (2 * V), (x4 - x2) / (2 * V)
+        gw[1, 0], gw[1, 1] = (y3 - y1) / (2 * V), (x1 - x3) / (2 * V)
+        gw[2, 0], gw[2, 1] = (y4 - y2) / (2 * V), (x2 - x4) / (2 * V)
+        gw[3, 0], gw[3, 1] = (y1 - y3) / (2 * V), (x3 - x1) / (2 * V)
+        for c in range(4):
+            for d in range(2):
+                at[c, d] = (q[c, d] - lower[d]) * inv_h[d]
+        if not _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
+            return p
+    return -1
+
+
+@njit(parallel=True, cache=True)
+def move_corners(corners, x, v_grid, lower, inv_h, cells, strides, offset, dt, blocks):
+    """Eq. 3.38: x_c += dt sum_I N_I(x_c) v_I, the hats at each corner (moved onto the grid);
+    then the particle is put at its domain's centroid, sum_c wf_c x_c (eq. 3.39), so that
+    particle and domain stay one (moved apart, the particle's stencil and its domain drift)."""
+    bounds = block_bounds(corners.shape[0], blocks)
+    for t in prange(blocks):
+        for p in range(bounds[t], bounds[t + 1]):
+            for c in range(4):
+                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt)
+            _centroid(corners[p], x[p])
+
+
+@njit(cache=True)
+def _centroid(q, out):
+    """The area centroid of the quadrilateral q (4, 2), from its two triangles 1-2-3 and 1-3-4."""
+    ax, ay = q[1, 0] - q[0, 0], q[1, 1] - q[0, 1]
+    bx, by = q[2, 0] - q[0, 0], q[2, 1] - q[0, 1]
+    cx, cy = q[3, 0] - q[0, 0], q[3, 1] - q[0, 1]
+    a1 = 0.5 * (ax * by - ay * bx)
+    a2 = 0.5 * (bx * cy - by * cx)
+    for d in range(2):
+        out[d] = ((q[0, d] + q[1, d] + q[2, d]) * a1 + (q[0, d] + q[2, d] + q[3, d]) * a2) / (3.0 * (a1 + a2))
+
+
+@njit(cache=True)
+def _move_corner(corner, v_grid, lower, inv_h, cells, strides, offset, dt):
+    first = np.empty(2, dtype=np.int64)
+    frac = np.empty(2)
+    for a in range(2):
+        s = min(max((corner[a] - lower[a]) * inv_h[a], 0.0), float(cells[a]))
+        first[a] = min(int(s), cells[a] - 1)
+        frac[a] = s - first[a]
+    vx = vy = 0.0
+    for j in range(4):
+        N = 1.0
+        node = -offset
+        for a in range(2):
+            bit = (j >> a) & 1
+            N *= frac[a] if bit else 1.0 - frac[a]
+            node += (first[a] + bit) * strides[a]
+        vx += N * v_grid[node, 0]
+        vy += N * v_grid[node, 1]
+    corner[0] += dt * vx
+    corner[1] += dt * vy
+
+
+class TrackedCorners:
+    """cpdi_q4's hook (solver/step/hooks.py): the corners move with the grid velocity the
+    particles just took (eq. 3.38; review Algorithm 5: at the end of every step)."""
+
+    def after_g2p(self, sim, dt: float) -> None:
+        f = sim.frame
+        p = sim.particles
+        move_corners(p.extra[CORNERS], p.x, sim.grid.v_new, f.lower, f.inv_h, f.cells, f.strides, f.offset, dt,
+                     sim.threads)
+
+
+def hook(sim):
+    return TrackedCorners()

@@ -1,0 +1,217 @@
+"""CPDI-R4 weights (solver/shape/kernels/cpdi.py): review 3.6, spec B.5, E27, E28.
+
+Tolerances: the weights are sums of a few O(1) products, so identities hold to
+round-off (1e-12); gradients scale with 1/h."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from test_shape_functions import evaluate, make_grid
+
+from solver import kernels, shape
+from solver.state import make_stencil
+
+
+def _random_F(n, dim, rng, spread=0.3):
+    """Deformation gradients with det > 0, stretch and shear up to `spread`."""
+    F = np.eye(dim)[None] + rng.uniform(-spread, spread, size=(n, dim, dim))
+    F[np.linalg.det(F) < 0.2] = np.eye(dim)
+    return F
+
+
+def _inside(grid, n, rng, margin):
+    s = rng.uniform(margin, grid.cells - margin, size=(n, len(grid.h)))
+    return grid.lower + s * grid.h
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_partition_of_unity_and_linear_reproduction_with_deformed_domains(dim):
+    """eq. 3.33: weights sum to 1, gradients to 0; sum_I phi_I x_I = x_p and
+    sum_I x_I (x) grad phi_I = I (the gradient of a linear field is exact), for
+    parallelograms sheared and stretched by F (entries of F - I up to 0.3: the domain of
+    side h/2 reaches at most 0.4 h from x_p), a cell away from the grid ends."""
+    rng = np.random.default_rng(2 + dim)
+    grid = make_grid(dim)
+    x = _inside(grid, 300, rng, 1.0)
+    F = _random_F(len(x), dim, rng)
+    outside, s = evaluate("cpdi_r4", x, grid, F)
+    assert outside == -1
+    nodes = grid.node_positions()[s.idx]
+    np.testing.assert_allclose(s.w.sum(axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(s.dw.sum(axis=1), 0.0, atol=1e-12 * np.max(grid.inv_h))
+    np.testing.assert_allclose(np.einsum("pk,pka->pa", s.w, nodes), x, atol=1e-12)
+    np.testing.assert_allclose(np.einsum("pka,pkb->pab", nodes, s.dw),
+                               np.broadcast_to(np.eye(dim), (len(x), dim, dim)), atol=1e-11)
+    assert np.all(s.w >= -1e-15)
+
+
+def test_2d_matches_the_printed_formula():
+    """Eq. 3.32 as the spec (B.5) prints it: phi_I = 1/4 sum_c N_I(x_c) and
+    grad phi_I = 1/V_p {(N_I(x1) - N_I(x3)) [r1y - r2y, r2x - r1x] + (N_I(x2) - N_I(x4)) [r1y + r2y, -r1x - r2x]},
+    corners counter-clockwise, V_p = 4 |r1 x r2|, with N_I the bilinear hats."""
+    rng = np.random.default_rng(7)
+    grid = make_grid(2)
+    x = _inside(grid, 50, rng, 1.0)
+    F = _random_F(len(x), 2, rng)
+    _, s = evaluate("cpdi_r4", x, grid, F)
+    l0 = grid.h / 2
+    for p in range(len(x)):
+        r1, r2 = F[p] @ [0.5 * l0[0], 0.0], F[p] @ [0.0, 0.5 * l0[1]]
+        corners = [x[p] - r1 - r2, x[p] + r1 - r2, x[p] + r1 + r2, x[p] - r1 + r2]
+        V = 4 * abs(r1[0] * r2[1] - r1[1] * r2[0])
+        nodes = grid.node_positions()[s.idx[p]]
+        N = np.array([[np.prod(np.maximum(0, 1 - np.abs(c - n) / grid.h)) for n in nodes] for c in corners])
+        np.testing.assert_allclose(s.w[p], N.mean(axis=0), atol=1e-13)
+        grad = (np.outer(N[0] - N[2], [r1[1] - r2[1], r2[0] - r1[0]])
+                + np.outer(N[1] - N[3], [r1[1] + r2[1], -r1[0] - r2[0]])) / V
+        np.testing.assert_allclose(s.dw[p], grad, atol=1e-10 * np.max(grid.inv_h))
+
+
+def test_e27_cpdi_l2_partition_of_unity_fails_only_near_the_grid_ends_without_extra_cells():
+    """E27: 3 cells of h = 1 (nodes 1-4 at 0..3), one particle of l_p = h sweeping from
+    node 1 to node 4. The review's CPDI-L2 (no extra cells): the weights on nodes 1-4 sum
+    to 1 except for 0 <= x < 0.5 and 2.5 < x <= 3, where an end of the particle lies
+    outside the 3 cells. Computed on a wider grid (cells on either side) and summed over
+    nodes 1-4 only, which is the 3-cell grid without extra cells. On the 3-cell grid
+    itself the ends are moved onto the grid (solver/shape/kernels/cpdi.py): the sum is 1
+    everywhere."""
+    wide = make_grid(1, cells=5, h=1.0)
+    wide.lower[:] = -1.0                      # nodes at -1..4; the review's nodes 1-4 at 0..3
+    x = np.linspace(0.0, 3.0, 61)[:, None]
+    F = np.ones((len(x), 1, 1))
+    length = np.full((len(x), 1), 1.0)         # l_p = h
+    module = shape.get("cpdi_r4")
+    for grid, lower_node in ((wide, 1), (make_grid(1, cells=3, h=1.0), 0)):
+        if grid is not wide:
+            grid.lower[:] = 0.0
+        stencil = make_stencil(len(x), 1, 4)
+        particles = SimpleNamespace(F=F, extra={"domain_length": length})
+        assert shape.evaluate(module, kernels.stencil_spec(1, 4), x, particles, grid, stencil) == -1
+        on_1_to_4 = np.where((stencil.idx >= lower_node) & (stencil.idx <= lower_node + 3), stencil.w, 0).sum(axis=1)
+        if grid is wide:
+            fails = np.abs(on_1_to_4 - 1) > 1e-12
+            expected = (x[:, 0] < 0.5 - 1e-12) | (x[:, 0] > 2.5 + 1e-12)
+            assert np.array_equal(fails, expected)
+            # and the weights there are what is left of the end beyond the grid: 1 - (0.5 - x) / 2 at the left
+            left = x[:, 0] < 0.5
+            np.testing.assert_allclose(on_1_to_4[left], 1 - 0.5 * (0.5 - x[left, 0]), atol=1e-12)
+            # not interpolating: at node 2 (x = 1, ends at 0.5 and 1.5) the weight on node 2 is 1/2, not 1
+            at_node = np.argmin(np.abs(x[:, 0] - 1.0))
+            assert np.max(stencil.w[at_node]) == pytest.approx(0.5)
+        else:
+            np.testing.assert_allclose(on_1_to_4, 1.0, atol=1e-12)
+
+
+def test_e28_a_domain_wider_than_the_stencil_is_reported_naming_its_size():
+    """E28: a domain spanning more than the three cells around the particle's own (here
+    a box of h/2 stretched 8x along x: 4 cells) is refused by the weights, and `failure`
+    tells it from a particle outside the grid; 3.8x (1.9 cells) is accepted."""
+    grid = make_grid(2, cells=8, h=0.25)
+    x = (grid.lower + 4.5 * grid.h)[None, :].repeat(2, axis=0)
+    F = np.array([np.diag([8.0, 1.0]), np.diag([3.8, 1.0])])
+    module = shape.get("cpdi_r4")
+    outside, _ = evaluate("cpdi_r4", x[:1], grid, F[:1])
+    assert outside == 0
+    particles = SimpleNamespace(F=F, extra={"domain_length": np.repeat(grid.h[None] / 2, 2, axis=0)})
+    quantity, detail = shape.failure(module, x, particles, grid, 0)
+    assert quantity == "particle domain (cpdi)" and "spans [4." in detail
+    assert evaluate("cpdi_r4", x[1:], grid, F[1:])[0] == -1
+    outside_grid = x.copy()
+    outside_grid[0, 0] = grid.lower[0] - 0.1
+    assert shape.failure(module, outside_grid, particles, grid, 0) is None
+
+
+def _scene(**method):
+    return {"version": 1, "name": "cpdi", "dimension": 2, "method": {"shape_function": "cpdi_r4", **method},
+            "grid": {"lower": [0.0, 0.0], "upper": [1.0, 1.0], "cell_size": 0.25},
+            "materials": {"m": {"model": "linear_elastic", "density": 1, "youngs_modulus": 1, "poisson_ratio": 0.3}},
+            "bodies": [{"name": "b", "material": "m", "particles_per_cell": 2,
+                        "geometry": {"type": "box", "lower": [0.25, 0.25], "upper": [0.5, 0.5]}}],
+            "time": {"end": 1.0}}
+
+
+@pytest.mark.parametrize("change,path,words", [
+    ({"method": {"shape_function": "cpdi_r4", "formulation": "tlmpm"}}, "method.shape_function", "only supported with formulation 'ulmpm'"),
+    ({"axisymmetric": True}, "method.shape_function", "not supported in axisymmetric scenes"),
+])
+def test_refused_where_the_review_gives_no_cpdi(change, path, words):
+    from solver.scene import SceneError, load_scene
+    scene = {**_scene(), **change}
+    with pytest.raises(SceneError) as error:
+        load_scene(scene)
+    assert any(e["path"] == path and words in e["message"] for e in error.value.errors), error.value.errors
+
+
+def test_particle_domain_field_is_the_seeded_box_carried_by_F():
+    """Corners x_p + F diag(l0/2) s_c (axis 0 fastest), l0 = h / particles_per_cell."""
+    from solver.fields import field
+    from solver.scene import load_scene
+    from solver.stepper import ExplicitMPM
+    sim = ExplicitMPM(load_scene(_scene()))
+    p = sim.particles
+    p.F[:] = [[1.5, 0.2], [0.0, 0.8]]
+    corners = field("particle_domain")(sim).reshape(p.count, 4, 2)
+    half = 0.25 / 2 / 2
+    for c, (sx, sy) in enumerate([(-1, -1), (1, -1), (-1, 1), (1, 1)]):
+        np.testing.assert_allclose(corners[:, c], p.x + np.array([1.5 * sx + 0.2 * sy, 0.8 * sy]) * half, atol=1e-15)
+
+
+def _evaluate_q4(x, corners, grid):
+    module = shape.get("cpdi_q4")
+    stencil = make_stencil(len(x), 2, 4)
+    particles = SimpleNamespace(extra={"domain_corners": np.ascontiguousarray(corners)})
+    outside = shape.evaluate(module, kernels.stencil_spec(2, 16), np.ascontiguousarray(x), particles, grid, stencil)
+    return outside, stencil
+
+
+def test_q4_on_a_parallelogram_is_r4():
+    """A quadrilateral that is a parallelogram has a = b = 0 in eq. 3.36: the weights are
+    1/4 each and eq. 3.37 is eq. 3.32, so Q4 and R4 agree (to round-off)."""
+    from solver.shape.kernels.cpdi import domain_corners
+    rng = np.random.default_rng(17)
+    grid = make_grid(2)
+    x = _inside(grid, 100, rng, 1.0)
+    F = _random_F(len(x), 2, rng)
+    corners = domain_corners(x, np.repeat(grid.h[None] / 2, len(x), axis=0), F)[:, [0, 1, 3, 2]]   # counter-clockwise
+    _, r4 = evaluate("cpdi_r4", x, grid, F)
+    outside, q4 = _evaluate_q4(x, corners, grid)
+    assert outside == -1
+    np.testing.assert_array_equal(q4.idx, r4.idx)
+    np.testing.assert_allclose(q4.w, r4.w, atol=1e-13)
+    np.testing.assert_allclose(q4.dw, r4.dw, atol=1e-11 * np.max(grid.inv_h))
+
+
+def test_q4_on_random_quadrilaterals_reproduces_the_centroid_and_linear_gradients():
+    """For a general convex quadrilateral: weights sum to 1 and gradients to 0, sum_I phi_I x_I
+    is the domain's centroid (the weights average the hats over the domain, eq. 3.36; the
+    spec checked them against the exact integrals) and sum_I x_I (x) grad phi_I = I."""
+    rng = np.random.default_rng(23)
+    grid = make_grid(2)
+    x = _inside(grid, 200, rng, 1.0)
+    square = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
+    corners = x[:, None, :] + (square[None] + rng.uniform(-0.3, 0.3, size=(len(x), 4, 2))) * grid.h / 4
+    outside, s = _evaluate_q4(x, corners, grid)
+    assert outside == -1
+    nodes = grid.node_positions()[s.idx]
+    np.testing.assert_allclose(s.w.sum(axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(s.dw.sum(axis=1), 0.0, atol=1e-11 * np.max(grid.inv_h))
+    np.testing.assert_allclose(np.einsum("pka,pkb->pab", nodes, s.dw),
+                               np.broadcast_to(np.eye(2), (len(x), 2, 2)), atol=1e-11)
+    # the centroid of each quadrilateral, from its two triangles
+    a, b, c, d = (corners[:, i] for i in range(4))
+    def cross(u, v):
+        return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    area1, area2 = 0.5 * np.abs(cross(b - a, c - a)), 0.5 * np.abs(cross(c - a, d - a))
+    centroid = ((a + b + c) / 3 * area1[:, None] + (a + c + d) / 3 * area2[:, None]) / (area1 + area2)[:, None]
+    np.testing.assert_allclose(np.einsum("pk,pka->pa", s.w, nodes), centroid, atol=1e-12)
+
+
+def test_q4_is_refused_outside_2d():
+    from solver.scene import SceneError, load_scene
+    scene = _scene(shape_function="cpdi_q4")
+    load_scene(scene)
+    scene.update(dimension=3, grid={"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.25})
+    scene["bodies"][0]["geometry"] = {"type": "box", "lower": [0.25] * 3, "upper": [0.5] * 3}
+    with pytest.raises(SceneError) as error:
+        load_scene(scene)
+    assert any(e["path"] == "method.shape_function" and "2D" in e["message"] for e in error.value.errors)
