@@ -399,6 +399,35 @@ class Damping(SceneModel):
         return self
 
 
+# --------------------------------------------------------------------------- contact
+
+class ContactPair(SceneModel):
+    """The friction of one pair of bodies (overrides the contact's `friction`)."""
+
+    bodies: Annotated[list[str], Field(min_length=2, max_length=2)]
+    friction: NonNegative
+
+
+class Contact(SceneModel):
+    """How bodies meet ([R] 5.1): "single_field" (one velocity field, bodies stick where
+    they share nodes) or "friction" (a velocity field per body, Coulomb friction between
+    them, Bardenhagen et al. 2000; solver/contact.py)."""
+
+    model: Literal["single_field", "friction"] = "single_field"
+    friction: NonNegative = 0.0   # mu of every pair the `pairs` do not list
+    pairs: list[ContactPair] = Field(default_factory=list)
+    normals: Literal["mass_gradient", "density_gradient"] = "mass_gradient"   # [R] (5.12) | (5.9)-(5.11)
+
+    _model_supported = supported("model", "CONTACT_MODELS")
+
+    _normals_supported = supported("normals", "CONTACT_NORMALS")
+
+    @property
+    def fields(self) -> bool:
+        """Whether each body has a velocity field of its own."""
+        return self.model != "single_field"
+
+
 # --------------------------------------------------------------------------- time, output
 
 class Time(SceneModel):
@@ -509,6 +538,7 @@ class Scene(SceneModel):
     body_force: list[BodyForceValue] | None = None
     loads: list[Load] = Field(default_factory=list)
     damping: Damping | None = None
+    contact: Contact = Field(default_factory=Contact)
     time: Time
     output: Output = Field(default_factory=Output)
     parallel: Parallel = Field(default_factory=Parallel)
@@ -554,6 +584,10 @@ class Scene(SceneModel):
         if shape_functions.REGISTRY[self.method.shape_function].even_cells:   # elements of two cells (bernstein)
             cells = [n + n % 2 for n in cells]
         return tuple(cells)
+
+    def grid_fields(self) -> int:
+        """Velocity fields the grid holds: one per body with contact "friction", else one."""
+        return len(self.bodies) if self.contact.fields else 1
 
     def grid_upper(self) -> tuple[float, ...]:
         return tuple(lo + n * h for lo, n, h in zip(self.grid_lower(), self.grid_shape(), self.cell_sizes()))
@@ -643,6 +677,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
                                     f"(parallel.processes = {scene.parallel.processes})"))
 
     problems += _condition_problems(scene, length_ok)
+    problems += _contact_problems(scene, names)
     if grid_ok:
         problems += slab_problems(scene)
     return problems
@@ -666,6 +701,44 @@ def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
                 problems.append((f"{path}.face", f"face {condition.face!r} already has a wall "
                                                  f"(boundary_conditions[{walls[condition.face]}])"))
             walls.setdefault(condition.face, i)
+    return problems
+
+
+def _contact_problems(scene: Scene, names: dict[str, int]) -> list[tuple[str, str]]:
+    """Contact pairs name two different bodies once; the per-body fields need ULMPM and fit in memory."""
+    contact = scene.contact
+    problems: list[tuple[str, str]] = []
+    seen: dict[frozenset, int] = {}
+    for i, pair in enumerate(contact.pairs):
+        path = f"contact.pairs[{i}].bodies"
+        unknown = [name for name in pair.bodies if name not in names]
+        for name in unknown:
+            defined = ", ".join(repr(n) for n in names)
+            problems.append((path, f"unknown body {name!r}; defined: {defined}"))
+        key = frozenset(pair.bodies)
+        if len(key) < 2:
+            problems.append((path, f"a pair of two different bodies, got {pair.bodies[0]!r} twice"))
+        elif key in seen:
+            problems.append((path, f"the pair {sorted(key)} is already listed (contact.pairs[{seen[key]}])"))
+        seen.setdefault(key, i)
+    if not contact.fields:
+        if contact.pairs or contact.friction:
+            problems.append(("contact.model", "'single_field' has no friction or pairs: use model 'friction'"))
+        return problems
+    if scene.method.formulation != "ulmpm":
+        problems.append(("contact.model", f"{contact.model!r} needs formulation 'ulmpm' (the per-body fields are "
+                                          f"grid fields of the updated-Lagrangian step; TLMPM takes `tools`)"))
+    if contact.normals == "density_gradient" and scene.parallel.processes > 1:
+        problems.append(("contact.normals", f"'density_gradient' is not supported yet with several processes "
+                                            f"(parallel.processes = {scene.parallel.processes}): the cell "
+                                            f"densities of the slabs' edges are not exchanged; use 'mass_gradient'"))
+    nodes = int(np.prod([n + 1 for n in scene.grid_shape()])) if scene.grid.lower is not None else 0
+    needed = scene.grid_fields() * nodes * 8 * (2 + 4 * scene.dimension)   # grid arrays, normals, presence
+    if needed > capabilities.MAX_CONTACT_FIELD_BYTES:
+        problems.append(("contact.model", f"{scene.grid_fields()} velocity fields (one per body) of {nodes} nodes need "
+                                          f"{needed / 2**30:.3g} GiB, more than the "
+                                          f"{capabilities.MAX_CONTACT_FIELD_BYTES / 2**30:.3g} GiB allowed: "
+                                          f"fewer bodies or a coarser grid"))
     return problems
 
 
@@ -852,8 +925,10 @@ def _without_tags(loc: tuple, data: Any) -> list:
     for item in loc:
         # A tag comes right after the union's position, even where a key has the
         # same name as the tag ({"type": "velocity", "velocity": [...]}).
-        if (not tag_skipped and isinstance(node, dict) and isinstance(item, str)
-                and item in (node.get("type"), node.get("model"))):
+        # "model" tags materials and their parts, not the contact ({"model": "friction", "friction": 0.3})
+        tags = (node.get("type"), node.get("model") if kept[:1] != ["contact"] else None) \
+            if isinstance(node, dict) else ()
+        if not tag_skipped and isinstance(item, str) and item in tags:
             tag_skipped = True
             continue
         tag_skipped = False

@@ -49,7 +49,7 @@ class AffineTransfer:
 
     def __init__(self, particles, grid):
         particles.require(AFFINE, (grid.h.shape[0], grid.h.shape[0]))
-        self.node_x = grid.node_positions()
+        self.node_x = np.tile(grid.node_positions(), (grid.fields, 1))   # x_I of every field's nodes
 
     def p2g(self, spec, stencil, particles, x, grid_mom, copies_mom) -> None:
         affine_p2g(spec, stencil.idx, stencil.w, particles.mass, x, particles.extra[AFFINE], self.node_x, grid_mom,

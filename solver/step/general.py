@@ -38,6 +38,8 @@ class GeneralPhases(Phases):
         if outside >= 0:
             quantity, detail = sim.formulation.outside
             sim.fail(outside, quantity, detail.format(where=np.array2string(x[outside], precision=6)))
+        for hook in sim.hooks.after_weights:
+            hook(sim)
 
     # -- P2G ------------------------------------------------------------------
 

@@ -29,9 +29,14 @@ CASES = {
     "rigid": scene(RIGID_2D),
     "axisymmetric": scene(AXISYMMETRIC),
     "tlmpm": scene(TLMPM_2D),
+    # a field per body (solver/contact.py): the fields and the normals cross the halo
+    "contact": scene(SCENE_2D, contact={"model": "friction", "friction": 0.3},
+                     boundary_conditions=[{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.2}]),
+    "contact-rigid": scene(RIGID_2D, contact={"model": "friction", "friction": 0.2}),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
-        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3)]
+        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3), ("contact", 2), ("contact", 3),
+        ("contact-rigid", 2)]
 
 
 @pytest.fixture(scope="module")
