@@ -165,14 +165,14 @@ def density_normals(density, cells, inv_h, fields, n_nodes, strides, presence, g
 # -- the correction --------------------------------------------------------------
 
 @njit(cache=True)
-def _unit(vector, out):
-    """out = vector / |vector| (0 for a zero vector); returns |vector|."""
+def _unit(vector, out, floor=0.0):
+    """out = vector / |vector| (0 where |vector| <= floor); returns |vector|."""
     norm = 0.0
     for a in range(vector.shape[0]):
         norm += vector[a] * vector[a]
     norm = math.sqrt(norm)
     for a in range(vector.shape[0]):
-        out[a] = vector[a] / norm if norm > 0.0 else 0.0
+        out[a] = vector[a] / norm if norm > floor else 0.0
     return norm
 
 
@@ -203,12 +203,15 @@ def coulomb(v, v_cm, n, mu, out):
 
 
 @njit(cache=True)
-def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, friction, record, owned,
+def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, friction, flat, record, owned,
                    impulse, pair_impulse, totals):
     """Contact at every node where more than one field has particles (see the module docstring).
 
     mass, presence (fields * n_nodes,), gradient, v (fields * n_nodes, dim); rigid (fields,) bool
     and rigid_velocity (fields, dim) of the rigid bodies' fields; friction (fields, fields).
+    A field has no normal at a node where |gradient| <= flat * presence: inside a body, where
+    the particles around the node balance (flat = 1e-9 / h: round-off; wide shape functions reach
+    a cell or more into a rigid body, where its normal would be noise): no contact there.
     With `record`, on the nodes this process owns (`owned`; ghost copies are corrected alike and
     then overwritten by their owners' values): impulse[r] += m_k (v_k - v~_k) for a rigid field r (its action on the
     material), pair_impulse[k, o] += (normal, tangential) impulse of field o on field k,
@@ -239,7 +242,7 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
         for f in range(fields):
             e = f * n_nodes + node
             if presence[e] > 0.0:
-                _unit(gradient[e], unit[f])
+                _unit(gradient[e], unit[f], flat * presence[e])
                 m = mass[e]
                 total += m
                 for a in range(dim):
@@ -267,7 +270,7 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
                 continue
             for a in range(dim):   # against a rigid body its surface's normal alone ([R] 5.1.5)
                 others[a] = -others[a] if touching >= 0 else unit[k, a] - others[a]
-            if _unit(others, n) == 0.0:
+            if _unit(others, n) == 0.0:   # (also inside a rigid body, away from its surface: no contact)
                 continue
             D, stop, slide = coulomb(v[e], v_cm, n, friction[k, partner], out)
             if D <= 0.0:
@@ -335,6 +338,7 @@ class FieldContact:
         self.impulse = sim.rigid.impulse   # the rigid bodies' reactions come from the contact
         self.pair_impulse = np.zeros((grid.fields, grid.fields, 2))
         self.owned = sim.domain.owned_mask(grid)
+        self.flat = 1e-9 / float(np.min(grid.h))   # a normal below flat * presence is round-off
         self.totals = np.zeros(2)   # rigid fields' work, friction's work (this step)
         self._elapsed = 0.0
         self.names = [b.name.replace("/", "_") for b in scene.bodies]
@@ -368,7 +372,7 @@ class FieldContact:
             return 0.0
         self.totals[:] = 0.0
         correct_fields(self.grid.n_nodes, grid_mass, self.presence, self.gradient, v, self.rigid,
-                       self.rigid_velocity, self.friction, record, self.owned, self.impulse, self.pair_impulse,
+                       self.rigid_velocity, self.friction, self.flat, record, self.owned, self.impulse, self.pair_impulse,
                        self.totals)
         if record:
             self.sim.friction_work += float(self.totals[1])

@@ -26,7 +26,7 @@ def correct(n, mass, presence, gradient, v, rigid, mu, record=True, rigid_veloci
     pairs = np.zeros((fields, fields, 2))
     totals = np.zeros(2)
     velocity = np.zeros((fields, dim)) if rigid_velocity is None else rigid_velocity
-    contact.correct_fields(n, mass, presence, gradient, v, rigid, velocity, np.full((fields, fields), mu), record,
+    contact.correct_fields(n, mass, presence, gradient, v, rigid, velocity, np.full((fields, fields), mu), 1e-9, record,
                            np.ones(n, dtype=np.bool_), impulse, pairs, totals)
     return impulse, pairs, totals
 
