@@ -322,8 +322,8 @@ def friction_matrix(scene) -> np.ndarray:
 
 class FieldContact:
     """The contact of a scene with a velocity field per body, as a hook (solver/step/hooks.py):
-    stencils into the fields (after_weights), normals (before_update), the correction
-    (constrain), and the per-pair force series."""
+    stencils into the fields and their normals (after_weights), the correction (constrain),
+    and the per-pair force series."""
 
     def __init__(self, sim):
         scene, grid = sim.scene, sim.grid
@@ -341,17 +341,17 @@ class FieldContact:
         self.flat = 1e-9 / float(np.min(grid.h))   # a normal below flat * presence is round-off
         self.totals = np.zeros(2)   # rigid fields' work, friction's work (this step)
         self._elapsed = 0.0
+        self._dt = 0.0
         self.names = [b.name.replace("/", "_") for b in scene.bodies]
         self.pairs = [(a, b) for a in range(grid.fields) for b in range(a + 1, grid.fields)
                       if not (self.rigid[a] and self.rigid[b])]
 
     def after_weights(self, sim) -> None:
-        offset_fields(sim.stencil.idx, sim.particles.body, self.field_of_body, self.grid.n_nodes)
-
-    def before_update(self, sim, dt: float) -> None:
-        """The fields' presence and normals, from the particles' weights w_p (the mass; a rigid
-        particle, which carries none, its volume: only the direction of its field's normal counts)."""
+        """Stencils into the fields; the fields' presence and normals, from the particles' weights
+        w_p (the mass; a rigid particle, which carries none, its volume: only the direction of its
+        field's normal counts). Once a step, before any grid velocity is formed."""
         p, s, g = sim.particles, sim.stencil, self.grid
+        offset_fields(s.idx, p.body, self.field_of_body, g.n_nodes)
         weight = np.where(p.mass > 0.0, p.mass, p.volume)
         self.presence.fill(0.0)
         self.gradient.fill(0.0)
@@ -363,17 +363,19 @@ class FieldContact:
             cell_densities(p.x, p.body, self.field_of_body, weight, g.lower, g.inv_h, g.cells, density)
             density_normals(density, g.cells, g.inv_h, g.fields, g.n_nodes, g.strides, self.presence, self.gradient)
         sim.domain.sum_ghosts(self.presence, self.gradient)
-        self.rigid_velocity = sim.rigid.velocity
+
+    def before_update(self, sim, dt: float) -> None:
         self._dt = dt
 
     def constrain(self, grid_mass, v, record: bool) -> float:
-        """Correct v~_I^{t+dt} (and MUSL's remapped velocity); v_I^t stays the bodies' own."""
+        """Correct v~_I^{t+dt} and MUSL's remapped velocity; v_I^t stays the bodies' own (FLIP adds
+        v_I^{t+dt} - v_I^t to the particles; USF takes its strain rate from it, as [R] Algorithm 6)."""
         if v is self.grid.v_old:
             return 0.0
         self.totals[:] = 0.0
         correct_fields(self.grid.n_nodes, grid_mass, self.presence, self.gradient, v, self.rigid,
-                       self.rigid_velocity, self.friction, self.flat, record, self.owned, self.impulse, self.pair_impulse,
-                       self.totals)
+                       self.sim.rigid.velocity, self.friction, self.flat, record, self.owned, self.impulse,
+                       self.pair_impulse, self.totals)
         if record:
             self.sim.friction_work += float(self.totals[1])
             self._elapsed += self._dt
