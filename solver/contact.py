@@ -203,6 +203,31 @@ def coulomb(v, v_cm, n, mu, out):
 
 
 @njit(cache=True)
+def _normal(k, node, n_nodes, mass, presence, unit, touching, others, n):
+    """n = the outward normal of field k against the other fields at the node (their unit
+    normals `unit`); returns the partner whose friction applies: the rigid field `touching`,
+    else the heaviest other; -1 where there is no normal."""
+    dim = n.shape[0]
+    partner = touching
+    heaviest = 0.0
+    for a in range(dim):
+        others[a] = 0.0
+    for f in range(unit.shape[0]):
+        ef = f * n_nodes + node
+        if f == k or presence[ef] <= 0.0 or (touching >= 0 and f != touching):
+            continue
+        for a in range(dim):
+            others[a] += unit[f, a]
+        if touching < 0 and mass[ef] > heaviest:
+            heaviest, partner = mass[ef], f
+    for a in range(dim):   # against a rigid body its surface's normal alone ([R] 5.1.5)
+        others[a] = -others[a] if touching >= 0 else unit[k, a] - others[a]
+    if partner < 0 or _unit(others, n) == 0.0:   # (also inside a rigid body, away from its surface)
+        return -1
+    return partner
+
+
+@njit(cache=True)
 def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, friction, flat, record, owned,
                    impulse, pair_impulse, totals):
     """Contact at every node where more than one field has particles (see the module docstring).
@@ -254,23 +279,8 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
             m = mass[e]
             if rigid[k] or presence[e] <= 0.0 or m <= 0.0:
                 continue
-            partner = touching
-            heaviest = 0.0
-            for a in range(dim):
-                others[a] = 0.0
-            for f in range(fields):
-                ef = f * n_nodes + node
-                if f == k or presence[ef] <= 0.0 or (touching >= 0 and f != touching):
-                    continue
-                for a in range(dim):
-                    others[a] += unit[f, a]
-                if touching < 0 and mass[ef] > heaviest:
-                    heaviest, partner = mass[ef], f
+            partner = _normal(k, node, n_nodes, mass, presence, unit, touching, others, n)
             if partner < 0:
-                continue
-            for a in range(dim):   # against a rigid body its surface's normal alone ([R] 5.1.5)
-                others[a] = -others[a] if touching >= 0 else unit[k, a] - others[a]
-            if _unit(others, n) == 0.0:   # (also inside a rigid body, away from its surface: no contact)
                 continue
             D, stop, slide = coulomb(v[e], v_cm, n, friction[k, partner], out)
             if D <= 0.0:
