@@ -7,7 +7,8 @@ body's field (`after_weights`), so P2G, the grid update, the conditions, G2P and
 kinematics run unchanged and give each body the single-field solution [R] (5.1). This hook
 then corrects the fields where they meet:
 
-- contact nodes: nodes where more than one field has particles (weight > 0);
+- contact nodes: nodes where more than one field has particles (weight > 0) and the bodies'
+  particles fill the node (sum_k sum_p V_p phi_I >= FILL of its volume, `_touching`);
 - normals ([R] 5.12, or 5.9-5.11 with the corrected bounds of A.8): g_k = sum_p w_p grad phi_I(x_p)
   over the particles of body k, which points out of body k; the normal of body k against
   the others at the node is n_k = (g_k/|g_k| - g_o/|g_o|) normalised, g_o the sum of the others'
@@ -58,14 +59,15 @@ def offset_fields(idx, body, field_of_body, n_nodes):
 
 
 @njit(parallel=True, cache=True)
-def scatter_normals(spec, idx, w, dw, weight, presence, gradient, copies_presence, copies_gradient):
-    """presence_I += w_p phi_I, gradient_I += w_p grad phi_I ([R] 5.12), per field through the
-    stencil (solver/kernels.py's P2G pattern: block t of particles into copy t - 1)."""
+def scatter_normals(spec, idx, w, dw, volume, weight, presence, gradient, copies_presence, copies_gradient):
+    """presence_I += V_p phi_I (the volume the body's particles give the node), gradient_I +=
+    w_p grad phi_I ([R] 5.12), per field through the stencil (solver/kernels.py's P2G
+    pattern: block t of particles into copy t - 1)."""
     dims, nodes = spec
     blocks = copies_presence.shape[0] + 1
     bounds = block_bounds(w.shape[0], blocks)
     for t in prange(blocks):
-        _normals_block(dims, nodes, bounds[t], bounds[t + 1], idx, w, dw, weight,
+        _normals_block(dims, nodes, bounds[t], bounds[t + 1], idx, w, dw, volume, weight,
                        own(t, presence, copies_presence), own(t, gradient, copies_gradient))
     if blocks > 1:
         add_node_copies(presence, copies_presence)
@@ -73,13 +75,13 @@ def scatter_normals(spec, idx, w, dw, weight, presence, gradient, copies_presenc
 
 
 @njit(cache=True)
-def _normals_block(dims, nodes, start, stop, idx, w, dw, weight, presence, gradient):
+def _normals_block(dims, nodes, start, stop, idx, w, dw, volume, weight, presence, gradient):
     dim, nk = len(dims), len(nodes)
     for p in range(start, stop):
         m = weight[p]
         for k in range(nk):
             node = idx[p, k]
-            presence[node] += m * w[p, k]
+            presence[node] += volume[p] * w[p, k]
             for a in range(dim):
                 gradient[node, a] += m * dw[p, k, a]
 
@@ -134,9 +136,9 @@ def cell_densities(x, body, field_of_body, weight, lower, inv_h, cells, density)
 
 
 @njit(cache=True)
-def density_normals(density, cells, inv_h, fields, n_nodes, strides, presence, gradient):
+def density_normals(density, cells, inv_h, fields, n_nodes, strides, gradient):
     """n_I = sum_c grad phi_I(x_c) rho_c ([R] 5.11) over the cells holding node I, phi the linear
-    hat: at a cell centre d phi/d x_a = +-(1/h_a) / 2^(dim-1). presence_I = sum_c rho_c / 2^dim."""
+    hat: at a cell centre d phi/d x_a = +-(1/h_a) / 2^(dim-1)."""
     dim = cells.shape[0]
     n_cells = 1
     for a in range(dim):
@@ -156,7 +158,6 @@ def density_normals(density, cells, inv_h, fields, n_nodes, strides, presence, g
                 node = node0
                 for a in range(dim):
                     node += ((corner >> a) & 1) * strides[a]
-                presence[node] += rho * scale * 0.5
                 for a in range(dim):
                     sign = 1.0 if (corner >> a) & 1 else -1.0
                     gradient[node, a] += sign * inv_h[a] * scale * rho
@@ -227,14 +228,35 @@ def _normal(k, node, n_nodes, mass, presence, unit, touching, others, n):
     return partner
 
 
+# Bodies touch at a node when their particles give it at least this share of its volume
+# (sum_k sum_p V_p phi_I = the node's volume inside bodies that fill their cells).
+FILL = 0.9
+
+
+@njit(cache=True)
+def _touching(presence, fields, n_nodes, node, volume):
+    """Whether the bodies' particles fill the node's volume (FILL of it): the bodies meet there.
+    Velocities alone would see contact as soon as two bodies share a node, up to a cell (wide
+    shape functions: two) before their particles meet, and the correction then acts on nodes
+    one body barely reaches, whose velocity is f / m of a sliver of mass: head-on impacts of
+    flat faces gained 10 % and more of their energy (docs/benchmarks.md). The volume check
+    follows Nairn's contact detection (Nairn 2013, CB-Geo's friction contact)."""
+    filled = 0.0
+    for f in range(fields):
+        filled += presence[f * n_nodes + node]
+    return filled >= FILL * volume
+
+
 @njit(cache=True)
 def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, friction, flat, record, owned,
-                   impulse, pair_impulse, totals):
+                   node_volume, impulse, pair_impulse, totals):
     """Contact at every node where more than one field has particles (see the module docstring).
 
-    mass, presence (fields * n_nodes,), gradient, v (fields * n_nodes, dim); rigid (fields,) bool
+    mass, presence (fields * n_nodes,: the volume each body gives a node), gradient, v
+    (fields * n_nodes, dim); node_volume (n_nodes,); rigid (fields,) bool
     and rigid_velocity (fields, dim) of the rigid bodies' fields; friction (fields, fields).
-    A field has no normal at a node where |gradient| <= flat * presence: inside a body, where
+    A field has no normal at a node where |gradient| <= flat * its weight there (the mass, a
+    rigid body's volume): inside a body, where
     the particles around the node balance (flat = 1e-9 / h: round-off; wide shape functions reach
     a cell or more into a rigid body, where its normal would be noise): no contact there.
     With `record`, on the nodes this process owns (`owned`; ghost copies are corrected alike and
@@ -259,7 +281,7 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
                 present += 1
                 if rigid[f] and touching < 0:
                     touching = f
-        if present < 2:
+        if present < 2 or not _touching(presence, fields, n_nodes, node, node_volume[node]):
             continue
         total = 0.0
         for a in range(dim):
@@ -267,7 +289,7 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
         for f in range(fields):
             e = f * n_nodes + node
             if presence[e] > 0.0:
-                _unit(gradient[e], unit[f], flat * presence[e])
+                _unit(gradient[e], unit[f], flat * (mass[e] if mass[e] > 0.0 else presence[e]))
                 m = mass[e]
                 total += m
                 for a in range(dim):
@@ -330,6 +352,15 @@ def friction_matrix(scene) -> np.ndarray:
     return mu
 
 
+def node_volumes(grid, axisymmetric: bool) -> np.ndarray:
+    """The volume each node stands for: prod h (axisymmetric: times 2 pi r_I, as the particles'
+    ring volumes; 0 on the axis, where the fill check then always passes)."""
+    volume = np.full(grid.n_nodes, float(np.prod(grid.h)))
+    if axisymmetric:
+        volume *= 2.0 * np.pi * grid.node_positions()[:, 0]
+    return volume
+
+
 class FieldContact:
     """The contact of a scene with a velocity field per body, as a hook (solver/step/hooks.py):
     stencils into the fields and their normals (after_weights), the correction (constrain),
@@ -348,7 +379,8 @@ class FieldContact:
         self.impulse = sim.rigid.impulse   # the rigid bodies' reactions come from the contact
         self.pair_impulse = np.zeros((grid.fields, grid.fields, 2))
         self.owned = sim.domain.owned_mask(grid)
-        self.flat = 1e-9 / float(np.min(grid.h))   # a normal below flat * presence is round-off
+        self.flat = 1e-9 / float(np.min(grid.h))   # a normal below flat * weight is round-off
+        self.node_volume = node_volumes(grid, scene.axisymmetric)
         self.totals = np.zeros(2)   # rigid fields' work, friction's work (this step)
         self._elapsed = 0.0
         self._dt = 0.0
@@ -357,21 +389,22 @@ class FieldContact:
                       if not (self.rigid[a] and self.rigid[b])]
 
     def after_weights(self, sim) -> None:
-        """Stencils into the fields; the fields' presence and normals, from the particles' weights
-        w_p (the mass; a rigid particle, which carries none, its volume: only the direction of its
-        field's normal counts). Once a step, before any grid velocity is formed."""
+        """Stencils into the fields; the volume each field gives the nodes, and the fields' normals
+        from the particles' weights w_p (the mass; a rigid particle, which carries none, its
+        volume: only the direction of its field's normal counts). Once a step, before any grid
+        velocity is formed."""
         p, s, g = sim.particles, sim.stencil, self.grid
         offset_fields(s.idx, p.body, self.field_of_body, g.n_nodes)
         weight = np.where(p.mass > 0.0, p.mass, p.volume)
         self.presence.fill(0.0)
         self.gradient.fill(0.0)
-        if self.normals == "mass_gradient":
-            scatter_normals(sim.spec, s.idx, s.w, s.dw, weight, self.presence, self.gradient,
-                            sim.copies.mass, sim.copies.force)
-        else:
+        scatter_normals(sim.spec, s.idx, s.w, s.dw, p.volume, weight, self.presence, self.gradient,
+                        sim.copies.mass, sim.copies.force)
+        if self.normals == "density_gradient":
+            self.gradient.fill(0.0)
             density = np.zeros(g.fields * int(np.prod(g.cells)))
             cell_densities(p.x, p.body, self.field_of_body, weight, g.lower, g.inv_h, g.cells, density)
-            density_normals(density, g.cells, g.inv_h, g.fields, g.n_nodes, g.strides, self.presence, self.gradient)
+            density_normals(density, g.cells, g.inv_h, g.fields, g.n_nodes, g.strides, self.gradient)
         sim.domain.sum_ghosts(self.presence, self.gradient)
 
     def before_update(self, sim, dt: float) -> None:
@@ -384,7 +417,8 @@ class FieldContact:
             return 0.0
         self.totals[:] = 0.0
         correct_fields(self.grid.n_nodes, grid_mass, self.presence, self.gradient, v, self.rigid,
-                       self.sim.rigid.velocity, self.friction, self.flat, record, self.owned, self.impulse,
+                       self.sim.rigid.velocity, self.friction, self.flat, record, self.owned, self.node_volume,
+                       self.impulse,
                        self.pair_impulse, self.totals)
         if record:
             self.sim.friction_work += float(self.totals[1])

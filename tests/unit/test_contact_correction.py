@@ -27,7 +27,7 @@ def correct(n, mass, presence, gradient, v, rigid, mu, record=True, rigid_veloci
     totals = np.zeros(2)
     velocity = np.zeros((fields, dim)) if rigid_velocity is None else rigid_velocity
     contact.correct_fields(n, mass, presence, gradient, v, rigid, velocity, np.full((fields, fields), mu), 1e-9, record,
-                           np.ones(n, dtype=np.bool_), impulse, pairs, totals)
+                           np.ones(n, dtype=np.bool_), np.zeros(n), impulse, pairs, totals)   # (volume 0: bodies touch)
     return impulse, pairs, totals
 
 

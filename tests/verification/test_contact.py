@@ -185,6 +185,8 @@ def test_friction_force_is_at_most_mu_times_the_normal_force():
 
 # -- E2 with a field per body -----------------------------------------------------------
 
+EXACT_CONTACT = (0.6 * math.sqrt(2) - 0.4) / (2 * math.sqrt(2) * 0.1)   # 1.5858 s: the gap over the closing speed
+
 def two_disks(contact):
     import json
     from pathlib import Path
@@ -202,24 +204,61 @@ def test_two_disks_frictionless_contact_rebound_and_conserve_momentum():
         sim.advance(0.001)
     total = body_momentum(sim, 0) + body_momentum(sim, 1)
     assert np.abs(total).max() < 1e-12 * np.abs(p0).max()
-    # the disks came apart: each moves back along the diagonal at most of its speed
-    assert body_momentum(sim, 0) @ p0 / (p0 @ p0) == pytest.approx(-0.89, abs=0.03)
+    # the disks came apart: each moves back along the diagonal with most of its speed
+    # (0.79 measured; the single field 0.94, docs/benchmarks.md)
+    rebound = -body_momentum(sim, 0) @ p0 / (p0 @ p0)
+    assert 0.7 < rebound < 1.0
     e = sim.energies()
-    # the nodal correction is a perfectly inelastic impact of the contact nodes: a few
-    # per cent of the energy; the rest is kinetic and the disks' vibration
-    assert 0.97 * e0 < e.total <= e0 * (1 + 1e-9)
+    # the nodal correction is a perfectly inelastic impact of the contact nodes: it takes
+    # energy (6 % measured), it never makes any; the rest is kinetic and the disks' vibration
+    assert 0.9 * e0 < e.total <= e0 * (1 + 1e-9)
 
 
-def test_two_disks_first_steps_of_contact_conserve_momentum():
+def head_on_blocks(scheme, shape="linear", transfer="flip"):
+    """Two 0.1 x 0.1 blocks meeting face to face at 2 m/s (frictionless)."""
+    block = lambda name, y0, v: {"name": name, "material": "rubber", "particles_per_cell": 2,
+                                 "geometry": {"type": "box", "lower": [0.02, y0], "upper": [0.12, y0 + 0.1]},
+                                 "initial_velocity": [0.0, v]}
+    return {"version": 1, "name": "head-on", "dimension": 2,
+            "method": {"scheme": scheme, "shape_function": shape, "transfer": transfer},
+            "grid": {"lower": [-0.1, 0.0], "upper": [0.3, 0.5], "cell_size": H},
+            "materials": {"rubber": {"model": "linear_elastic", "density": RHO, "youngs_modulus": E,
+                                     "poisson_ratio": 0.3}},
+            "bodies": [block("low", 0.1, 1.0), block("high", 0.26, -1.0)],
+            "contact": {"model": "friction"}, "time": {"end": 0.1}, "output": {"frames": 2}}
+
+
+@pytest.mark.parametrize("scheme,shape,transfer", [("musl", "linear", "flip"), ("usf", "linear", "flip"),
+                                                   ("musl", "quadratic_bspline", "apic")])
+def test_head_on_impact_makes_no_energy(scheme, shape, transfer):
+    # contact only where the bodies' particles fill the nodes (the volume check): without it the
+    # nodes one body barely reached made 11 % (MUSL), 120 % (USF) more energy than there was
+    sim = ExplicitMPM(load_scene(head_on_blocks(scheme, shape, transfer)))
+    e0 = sim.energies().total
+    dt = sim.stable_time_step(0.5)
+    while sim.time < 0.1:
+        sim.advance(dt)
+    assert sim.energies().total <= e0 * (1 + 1e-9)
+    assert body_momentum(sim, 0)[1] < 0.0   # and they did bounce
+
+
+def test_two_disks_meet_near_the_exact_time_and_conserve_momentum():
+    # E2: the disks' surfaces meet at 1.5858 s; [R] sees the single field's contact at 1.3 s (a
+    # cell early: shared nodes). With the volume check the bodies meet where their particles
+    # fill a node: after the single field's time and not after the exact one (1.525 s measured).
     sim = ExplicitMPM(load_scene(two_disks({"model": "friction", "friction": 0.3})))
-    for _ in range(1200):   # contact starts at about 1.13 s
+    for _ in range(1300):
         sim.advance(0.001)
+    assert sim.reactions()["contact_disk1_disk2_normal"] == 0.0
     p0 = np.abs(body_momentum(sim, 0)).max()
-    for _ in range(150):
+    first = None
+    while sim.time < 1.65:
         sim.advance(0.001)
         total = body_momentum(sim, 0) + body_momentum(sim, 1)
         assert np.abs(total).max() < 1e-12 * p0
-    assert sim.reactions()["contact_disk1_disk2_normal"] > 0.0
+        if first is None and sim.reactions()["contact_disk1_disk2_normal"] > 0.0:
+            first = sim.time
+    assert first is not None and 1.3 < first <= EXACT_CONTACT
 
 
 # -- E30: normals of a disk ------------------------------------------------------------
