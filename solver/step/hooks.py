@@ -80,9 +80,11 @@ class GridConditions:
     def constrain(self, grid_mass, v, record: bool) -> float:
         c, g = self.constraints, self.grid
         work = 0.0
-        walls = c.friction_node.size and (v is not g.v_old)
+        walls = c.friction_node.size > 0 and v is not g.v_old
         self._dissipated[0] = 0.0
-        for mass_f, v_f in zip(g.field_views(grid_mass), g.field_views(v)):
+        # one field: the arrays whole (no views to make at every call of the single-field step)
+        fields = ((grid_mass, v),) if g.fields == 1 else zip(g.field_views(grid_mass), g.field_views(v))
+        for mass_f, v_f in fields:
             if walls:
                 contact.friction_wall(c.friction_node, c.friction_axis, c.friction_sign, c.friction_mu, v_f, mass_f,
                                       self._dissipated)
