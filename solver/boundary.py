@@ -1,7 +1,8 @@
 """Grid boundary conditions as (node, axis, value) constraints.
 
 Walls fix components on a face of the grid: `stick` all of them, `slip` the
-normal one. Velocity conditions fix the given components on every node inside a
+normal one; a `friction` wall is a Coulomb contact with the face at rest
+(solver/contact.py: friction_wall), listed apart as (node, axis, outward sign, mu). Velocity conditions fix the given components on every node inside a
 box; a value may be an expression in t, re-evaluated each step.
 """
 from __future__ import annotations
@@ -38,6 +39,7 @@ def face_material(scene, face: str):
 class Constraints:
     def __init__(self, scene, grid):
         nodes, axes, values, expressions = [], [], [], []
+        friction = []   # (nodes, axis, outward sign, mu) of each frictional wall
         positions = grid.node_positions()
         dim = scene.dimension
         tol = 1e-9 * float(np.min(grid.h))
@@ -45,6 +47,9 @@ class Constraints:
             if bc.type == "wall":
                 axis = AXES[bc.face[0]]
                 on_face = face_nodes(grid, bc.face)
+                if bc.mode == "friction":
+                    friction.append((on_face, axis, 1.0 if bc.face[1] == "+" else -1.0, bc.friction))
+                    continue
                 fixed_axes = range(dim) if bc.mode == "stick" else (axis,)
                 for a in fixed_axes:
                     sel = on_face
@@ -79,8 +84,13 @@ class Constraints:
         self.axis = np.ascontiguousarray(np.concatenate(axes) if axes else np.zeros(0, np.int64), dtype=np.int64)
         self.value = np.ascontiguousarray(np.concatenate(values) if values else np.zeros(0))
         self._offsets = np.cumsum([0] + [v.size for v in values])
+        self.set_friction_walls(*_friction_columns(friction))
         self.time_dependent = any(e is not None for e in expressions)
         self.set_time(0.0)
+
+    def set_friction_walls(self, node, axis, sign, mu) -> None:
+        self.friction_node, self.friction_axis, self.friction_sign, self.friction_mu = (
+            np.ascontiguousarray(a) for a in (node, axis, sign, mu))
 
     def set_time(self, t: float) -> None:
         if not self.time_dependent:
@@ -88,3 +98,13 @@ class Constraints:
         for i, (_, expression) in enumerate(self._blocks):
             if expression is not None:
                 self.value[self._offsets[i]:self._offsets[i + 1]] = float(expression.evaluate(t=t))
+
+
+def _friction_columns(walls):
+    """The frictional walls' (node, axis, sign, mu) as one array each, a row per node."""
+    node = np.concatenate([w[0] for w in walls]) if walls else np.zeros(0, np.int64)
+    sizes = [w[0].size for w in walls]
+    return (node.astype(np.int64),
+            np.repeat([w[1] for w in walls], sizes).astype(np.int64),
+            np.repeat([w[2] for w in walls], sizes).astype(np.float64),
+            np.repeat([w[3] for w in walls], sizes).astype(np.float64))

@@ -15,7 +15,10 @@ SCHEMES = frozenset({"musl", "usl", "usf"})
 TRANSFERS = frozenset({"flip", "pic", "apic", "mls"})
 GEOMETRIES = frozenset({"box", "sphere", "cylinder", "polygon", "mesh", "points", "union", "difference", "intersection"})
 BOUNDARY_CONDITIONS = frozenset({"velocity", "wall", "temperature", "heat_flux", "convection", "absorbing"})
-WALL_MODES = frozenset({"stick", "slip"})
+WALL_MODES = frozenset({"stick", "slip", "friction"})
+CONTACT_MODELS = frozenset({"single_field", "friction"})   # solver/contact.py
+CONTACT_NORMALS = frozenset({"mass_gradient", "density_gradient"})
+MAX_CONTACT_FIELD_BYTES = 16 * 2**30   # the per-body grid fields of contact "friction"
 AXISYMMETRIC = True
 MAX_PROCESSES = 64   # MPI ranks (solver/parallel); the service caps jobs further (MPM_MAX_PROCESSES)
 

@@ -193,6 +193,7 @@ class _TimeLoop:
                                  strain_energy=e.strain, total_energy=e.total,
                                  external_work=e.external_work, boundary_work=e.boundary_work,
                                  **({"damping_work": e.damping_work} if sim.scene.damping else {}),
+                                 **({"friction_work": e.friction_work} if sim.frictional else {}),
                                  **sim.reactions(), **sim.thermal_series())
         supplied = self.initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0) + e.thermal
         if not e.total <= ENERGY_GROWTH_LIMIT * supplied + self.energy_floor:

@@ -62,7 +62,7 @@ from solver.schema import (
     supported,
     scene_error,
 )
-from solver.thermal_schema import thermal_problems
+from solver.thermal_schema import conducts, thermal_problems
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")
@@ -569,6 +569,35 @@ class Damping(SceneModel):
         return self
 
 
+# --------------------------------------------------------------------------- contact
+
+class ContactPair(SceneModel):
+    """The friction of one pair of bodies (overrides the contact's `friction`)."""
+
+    bodies: Annotated[list[str], Field(min_length=2, max_length=2)]
+    friction: NonNegative
+
+
+class Contact(SceneModel):
+    """How bodies meet ([R] 5.1): "single_field" (one velocity field, bodies stick where
+    they share nodes) or "friction" (a velocity field per body, Coulomb friction between
+    them, Bardenhagen et al. 2000; solver/contact.py)."""
+
+    model: Literal["single_field", "friction"] = "single_field"
+    friction: NonNegative = 0.0   # mu of every pair the `pairs` do not list
+    pairs: list[ContactPair] = Field(default_factory=list)
+    normals: Literal["mass_gradient", "density_gradient"] = "mass_gradient"   # [R] (5.12) | (5.9)-(5.11)
+
+    _model_supported = supported("model", "CONTACT_MODELS")
+
+    _normals_supported = supported("normals", "CONTACT_NORMALS")
+
+    @property
+    def fields(self) -> bool:
+        """Whether each body has a velocity field of its own."""
+        return self.model != "single_field"
+
+
 # --------------------------------------------------------------------------- time, output
 
 class Time(SceneModel):
@@ -679,6 +708,7 @@ class Scene(SceneModel):
     body_force: list[BodyForceValue] | None = None
     loads: list[Load] = Field(default_factory=list)
     damping: Damping | None = None
+    contact: Contact = Field(default_factory=Contact)
     time: Time
     output: Output = Field(default_factory=Output)
     parallel: Parallel = Field(default_factory=Parallel)
@@ -725,6 +755,10 @@ class Scene(SceneModel):
         if shape_functions.REGISTRY[self.method.shape_function].even_cells:   # elements of two cells (bernstein)
             cells = [n + n % 2 for n in cells]
         return tuple(cells)
+
+    def grid_fields(self) -> int:
+        """Velocity fields the grid holds: one per body with contact "friction", else one."""
+        return len(self.bodies) if self.contact.fields else 1
 
     def grid_upper(self) -> tuple[float, ...]:
         return tuple(lo + n * h for lo, n, h in zip(self.grid_lower(), self.grid_shape(), self.cell_sizes()))
@@ -816,6 +850,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
 
     problems += _condition_problems(scene, length_ok)
     problems += thermal_problems(scene, THERMAL_CONDITIONS, length_ok)
+    problems += _contact_problems(scene, names)
     if grid_ok:
         problems += slab_problems(scene)
     return problems
@@ -858,6 +893,62 @@ def _absorbing_problems(path: str, condition: AbsorbingCondition, scene: Scene) 
         return [(f"{path}.face", "the bodies that reach this face (within a cell) must be of one elastic "
                                  "material: its impedances rho c_p and rho c_s make the dashpots")]
     return []
+
+
+def _contact_problems(scene: Scene, names: dict[str, int]) -> list[tuple[str, str]]:
+    """Contact pairs name two different bodies once; the per-body fields need ULMPM and fit in memory."""
+    contact = scene.contact
+    problems: list[tuple[str, str]] = []
+    seen: dict[frozenset, int] = {}
+    for i, pair in enumerate(contact.pairs):
+        path = f"contact.pairs[{i}].bodies"
+        unknown = [name for name in pair.bodies if name not in names]
+        for name in unknown:
+            defined = ", ".join(repr(n) for n in names)
+            problems.append((path, f"unknown body {name!r}; defined: {defined}"))
+        key = frozenset(pair.bodies)
+        if len(key) < 2:
+            problems.append((path, f"a pair of two different bodies, got {pair.bodies[0]!r} twice"))
+        elif key in seen:
+            problems.append((path, f"the pair {sorted(key)} is already listed (contact.pairs[{seen[key]}])"))
+        seen.setdefault(key, i)
+    if not contact.fields:
+        if contact.pairs or contact.friction:
+            problems.append(("contact.model", "'single_field' has no friction or pairs: use model 'friction'"))
+        return problems
+    if scene.method.formulation != "ulmpm":
+        problems.append(("contact.model", f"{contact.model!r} needs formulation 'ulmpm' (the per-body fields are "
+                                          f"grid fields of the updated-Lagrangian step; TLMPM takes `tools`)"))
+    problems += _field_conflicts(scene)
+    if contact.normals == "density_gradient" and scene.parallel.processes > 1:
+        problems.append(("contact.normals", f"'density_gradient' is not supported yet with several processes "
+                                            f"(parallel.processes = {scene.parallel.processes}): the cell "
+                                            f"densities of the slabs' edges are not exchanged; use 'mass_gradient'"))
+    nodes = int(np.prod([n + 1 for n in scene.grid_shape()])) if scene.grid.lower is not None else 0
+    needed = scene.grid_fields() * nodes * 8 * (2 + 4 * scene.dimension)   # grid arrays, normals, presence
+    if needed > capabilities.MAX_CONTACT_FIELD_BYTES:
+        problems.append(("contact.model", f"{scene.grid_fields()} velocity fields (one per body) of {nodes} nodes need "
+                                          f"{needed / 2**30:.3g} GiB, more than the "
+                                          f"{capabilities.MAX_CONTACT_FIELD_BYTES / 2**30:.3g} GiB allowed: "
+                                          f"fewer bodies or a coarser grid"))
+    return problems
+
+
+def _field_conflicts(scene: Scene) -> list[tuple[str, str]]:
+    """Features whose grid arrays hold one field: they would read or write only the first
+    body's field (or past the end of their arrays) under contact "friction"."""
+    problems = []
+    if conducts(scene):
+        problems.append(("contact.model", f"{scene.contact.model!r} is not supported yet with heat conduction "
+                                          "(the grid temperature is one field)"))
+    for i, condition in enumerate(scene.boundary_conditions):
+        if condition.type == "absorbing":
+            problems.append((f"boundary_conditions[{i}].type", "absorbing faces are not supported yet with "
+                                                               f"contact {scene.contact.model!r}"))
+    if scene.method.shape_function == "cpdi_q4":
+        problems.append(("method.shape_function", "'cpdi_q4' is not supported yet with contact "
+                                                  f"{scene.contact.model!r} (its corners move on one field)"))
+    return problems
 
 
 def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_ok) -> list[tuple[str, str]]:
@@ -1092,8 +1183,10 @@ def _without_tags(loc: tuple, data: Any) -> list:
     for item in loc:
         # A tag comes right after the union's position, even where a key has the
         # same name as the tag ({"type": "velocity", "velocity": [...]}).
-        if (not tag_skipped and isinstance(node, dict) and isinstance(item, str)
-                and item in (node.get("type"), node.get("model"))):
+        # "model" tags materials and their parts, not the contact ({"model": "friction", "friction": 0.3})
+        tags = (node.get("type"), node.get("model") if kept[:1] != ["contact"] else None) \
+            if isinstance(node, dict) else ()
+        if not tag_skipped and isinstance(item, str) and item in tags:
             tag_skipped = True
             continue
         tag_skipped = False

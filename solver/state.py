@@ -70,7 +70,12 @@ class Particles:
 
 @dataclass
 class Grid:
-    """A regular background grid; nodes are numbered with x fastest."""
+    """A regular background grid; nodes are numbered with x fastest.
+
+    With contact "friction" the nodal arrays hold one velocity field per body, one after
+    the other: node I of field f is entry f * n_nodes + I (solver/contact.py), and a
+    particle's stencil points into its body's field. Everything node by node (the update,
+    the conditions, damping) then runs on every field at once."""
 
     lower: np.ndarray      # (dim,)
     h: np.ndarray          # (dim,) cell sizes
@@ -80,6 +85,7 @@ class Grid:
     force: np.ndarray      # (n_nodes, dim)
     v_old: np.ndarray      # (n_nodes, dim) v_I^t
     v_new: np.ndarray      # (n_nodes, dim) v~_I^{t+dt}, then v_I^{t+dt}
+    fields: int = 1        # velocity fields (the arrays hold fields * n_nodes entries)
     inv_h: np.ndarray = field(init=False)
     strides: np.ndarray = field(init=False)
 
@@ -94,7 +100,13 @@ class Grid:
 
     @property
     def n_nodes(self) -> int:
+        """Nodes of the grid (of one field)."""
         return int(np.prod(self.node_counts))
+
+    def field_views(self, array: np.ndarray) -> list[np.ndarray]:
+        """The contiguous rows of each field in a nodal array."""
+        n = self.n_nodes
+        return [array[f * n:(f + 1) * n] for f in range(self.fields)]
 
     def node_positions(self) -> np.ndarray:
         """(n_nodes, dim) coordinates, in node order."""
@@ -121,7 +133,8 @@ class Stencil:
 def make_grid(scene) -> Grid:
     dim = scene.dimension
     cells = np.asarray(scene.grid_shape(), dtype=np.int64)
-    n_nodes = int(np.prod(cells + 1))
+    fields = scene.grid_fields()
+    n_nodes = fields * int(np.prod(cells + 1))
     return Grid(
         lower=np.asarray(scene.grid_lower(), dtype=np.float64),
         h=np.asarray(scene.cell_sizes(), dtype=np.float64),
@@ -131,6 +144,7 @@ def make_grid(scene) -> Grid:
         force=np.zeros((n_nodes, dim)),
         v_old=np.zeros((n_nodes, dim)),
         v_new=np.zeros((n_nodes, dim)),
+        fields=fields,
     )
 
 

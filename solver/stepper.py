@@ -49,6 +49,7 @@ class Energies:
     boundary_work: float
     damping_work: float = 0.0   # work of the damping forces (<= 0), solver/damping.py
     thermal: float = 0.0        # the most mechanical energy thermal expansion can have given (solver/thermal.py)
+    friction_work: float = 0.0  # work of contact and wall friction on the sliding (<= 0), solver/contact.py
 
     @property
     def total(self) -> float:
@@ -86,6 +87,7 @@ class ExplicitMPM:
         self.external_work = 0.0
         self.boundary_work = 0.0
         self.damping_work = 0.0
+        self.friction_work = 0.0
         self.scheme = step.SCHEMES[method.scheme]
         self.phases = step.backend_for(scene, general)(self)
         self.added_hooks = []   # hooks given by add_hook, kept when the grid is placed again
@@ -142,7 +144,7 @@ class ExplicitMPM:
         self.constraints = self.domain.constraints(self.scene, self.grid)
         if self.axisymmetry is not None:
             self.axisymmetry.place(self.grid, self.domain.first_node(0))   # radii from whole-grid node layers
-        self.copies = threads.ScatterCopies(self.grid.n_nodes, self.scene.dimension, self.threads)
+        self.copies = threads.ScatterCopies(self.grid.mass.shape[0], self.scene.dimension, self.threads)   # every field
         # APIC, MLS: PIC velocities plus the affine matrix C_p (solver/transfer.py)
         self.affine = affine_transfer(self.scene, self.particles, self.grid)
         self.hooks = step.scene_hooks(self)
@@ -179,14 +181,23 @@ class ExplicitMPM:
         return dt
 
     def reactions(self) -> dict[str, float]:
-        """The rigid bodies' reaction forces (mean since the last call), by series name."""
-        return self.rigid.reactions()
+        """The rigid bodies' reaction forces and the hooks' force series (contact pairs), means
+        since the last call, by series name."""
+        return {**self.rigid.reactions(), **self.hooks.series()}
+
+    @property
+    def frictional(self) -> bool:
+        """Whether friction can act (contact with a field per body, or a frictional wall): the
+        energy series then has friction_work."""
+        return self.scene.contact.fields or any(getattr(bc, "mode", None) == "friction"
+                                                for bc in self.scene.boundary_conditions)
 
     def energies(self) -> Energies:
         p = self.particles
         strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
         local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work,
-                 self.damping_work, self.expansion.energy_bound(self) if self.expansion is not None else 0.0]
+                 self.damping_work, self.expansion.energy_bound(self) if self.expansion is not None else 0.0,
+                 self.friction_work]
         return Energies(*(float(e) for e in self.domain.sum(local)))
 
     def thermal_series(self) -> dict[str, float]:

@@ -80,12 +80,13 @@ def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
     """8-byte values per particle: position, velocity (dim each), F and L (dim^2
     each), stress (9), mass, volume, volume0, density, id, the weights and weight
     gradients of the nodes it touches and their indices; 4 bytes for the body
-    index. Per node: mass, two momenta and force (dim each)."""
+    index. Per node: mass, two momenta and force (dim each); with contact "friction" that per
+    body, and each body's presence and normal (1 + dim)."""
     dim = scene.dimension
     touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
     per_particle = 8 * (2 * dim + 2 * dim * dim + 9 + 4 + 1 + touched * (1 + dim) + touched) + 4
-    per_node = 8 * (1 + 3 * dim)
-    return particles * per_particle + nodes * per_node
+    per_node = 8 * (1 + 3 * dim) + (8 * (1 + dim) if scene.contact.fields else 0)
+    return particles * per_particle + nodes * per_node * scene.grid_fields()
 
 
 def _wave_speed(scene: Scene, body: Body) -> float:

@@ -63,7 +63,7 @@ class AffineTransfer:
 
     def __init__(self, particles, grid):
         particles.require(AFFINE, (grid.h.shape[0], grid.h.shape[0]))
-        self.node_x = grid.node_positions()
+        self.node_x = np.tile(grid.node_positions(), (grid.fields, 1))   # x_I of every field's nodes
 
     def gradients(self, spec, stencil, x, blocks: int) -> None:
         """APIC keeps the shape function's gradients."""

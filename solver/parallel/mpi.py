@@ -87,9 +87,10 @@ class SlabDomain:
         lower[self.axis] += self.local[0] * self.h[self.axis]
         cells = self.cells.copy()
         cells[self.axis] = self.local[1] - self.local[0] - 1
-        n = int(np.prod(cells + 1))
+        fields = scene.grid_fields()   # contact: a velocity field per body, one after the other
+        n = fields * int(np.prod(cells + 1))
         return Grid(lower=lower, h=self.h.copy(), cells=cells, mass=np.zeros(n), momentum=np.zeros((n, dim)),
-                    force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)))
+                    force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)), fields=fields)
 
     def constraints(self, scene, grid: Grid) -> "_OwnedConstraints":
         return self.owned(Constraints(scene, grid_geometry(scene)), grid)
@@ -186,8 +187,16 @@ class SlabDomain:
     # -- grid exchange ------------------------------------------------------------
 
     def _layers(self, array: np.ndarray, lo: int, hi: int) -> np.ndarray:
-        shaped = array.reshape(self._node_shape + array.shape[1:])
-        return shaped[(slice(None),) * self._axis_position + (slice(lo, hi),)]
+        """Layers lo:hi of the split axis, in every velocity field the array holds."""
+        fields = array.shape[0] // int(np.prod(self._node_shape))
+        shaped = array.reshape((fields,) + self._node_shape + array.shape[1:])
+        return shaped[(slice(None),) * (self._axis_position + 1) + (slice(lo, hi),)]
+
+    def owned_mask(self, grid: Grid) -> np.ndarray:
+        """Which nodes of the local grid (of one field) this process owns."""
+        lo, hi = owned_nodes(self.cuts, self.rank)
+        layer = self.local[0] + (np.arange(grid.n_nodes) // self._local_strides[self.axis]) % grid.node_counts[self.axis]
+        return (layer >= lo) & (layer < hi)
 
     def first_node(self, axis: int) -> int:
         """Whole-grid index, along `axis`, of the local grid's first node layer."""
@@ -304,16 +313,22 @@ class _OwnedConstraints:
 
     def __init__(self, whole: Constraints, grid: Grid, owned: tuple[int, int], shift: int, axis: int,
                  local_strides: np.ndarray):
-        counts = grid.node_counts
-        coords = (whole.node[:, None] // grid.strides[None, :]) % counts[None, :]
-        keep = (coords[:, axis] >= owned[0]) & (coords[:, axis] < owned[1])
-        coords = coords[keep]
-        coords[:, axis] -= shift
+        def owned_local(nodes):
+            coords = (nodes[:, None] // grid.strides[None, :]) % grid.node_counts[None, :]
+            keep = (coords[:, axis] >= owned[0]) & (coords[:, axis] < owned[1])
+            coords = coords[keep]
+            coords[:, axis] -= shift
+            return np.ascontiguousarray(coords @ local_strides, dtype=np.int64), keep
+
+        self.node, keep = owned_local(whole.node)
         self._whole, self._keep = whole, keep
-        self.node = np.ascontiguousarray(coords @ local_strides, dtype=np.int64)
         self.axis = np.ascontiguousarray(whole.axis[keep])
         self.value = np.ascontiguousarray(whole.value[keep])
         self.time_dependent = whole.time_dependent
+        friction_node, kept = owned_local(whole.friction_node)
+        self.friction_node = friction_node
+        self.friction_axis, self.friction_sign, self.friction_mu = (
+            np.ascontiguousarray(a[kept]) for a in (whole.friction_axis, whole.friction_sign, whole.friction_mu))
 
     def set_time(self, t: float) -> None:
         if self.time_dependent:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
+
 from solver import shape
 from solver.boundary import Constraints
 from solver.results import ResultWriter
@@ -49,6 +51,10 @@ class SingleProcess:
 
     def owned_local(self, nodes):
         return nodes
+
+    def owned_mask(self, grid):
+        """Which nodes of the grid this process owns: all of them."""
+        return np.ones(grid.n_nodes, dtype=np.bool_)
 
     def sum_ghosts(self, *node_arrays) -> None:
         pass

@@ -42,8 +42,10 @@ class GeneralPhases(Phases):
                 return
             quantity, detail = sim.formulation.outside
             sim.fail(outside, quantity, detail.format(where=np.array2string(x[outside], precision=6)))
-        if sim.affine is not None:
-            sim.affine.gradients(sim.spec, sim.stencil, x, sim.threads)   # MLS: w D_p^-1 (x_I - x_p) for grad w
+        if sim.affine is not None:   # MLS: w D_p^-1 (x_I - x_p) for grad w, before contact moves the stencil
+            sim.affine.gradients(sim.spec, sim.stencil, x, sim.threads)   # into each body's field
+        for hook in sim.hooks.after_weights:
+            hook(sim)
 
     # -- P2G ------------------------------------------------------------------
 

@@ -8,6 +8,7 @@ calls the method of every hook that has one, in the order the hooks were made
 | point                               | where in the step                                   |
 |-------------------------------------|-----------------------------------------------------|
 | begin_step(sim, t_end)              | before the scheme: conditions at t + dt, rigid marks |
+| after_weights(sim)                  | after the stencil was evaluated (general backend)    |
 | after_forces(sim)                   | after P2G put f_I on the grid, before ghost sums     |
 | before_update(sim, dt)              | on the summed f_I (and m_I, (mv)_I), before v_I^t and v~_I^{t+dt} are formed from them |
 | constrain(grid_mass, v, record)     | on a grid velocity (v_I^t, v~_I^{t+dt}, MUSL's remapped v_I^{t+dt}) before the halo shares it; returns the constraint's work; `record` marks v~_I^{t+dt} |
@@ -17,6 +18,8 @@ calls the method of every hook that has one, in the order the hooks were made
 | end_step(sim, dt)                   | after the scheme: rigid moves, work of the loads     |
 
 The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_step),
+contact with a field per body (after_weights, before_update, constrain: solver/contact.py;
+the rigid bodies then only move and their fields meet the others there),
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `absorbing`
 boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
@@ -32,13 +35,15 @@ has added its part (solver/step/phases.py).
 """
 from __future__ import annotations
 
-from solver import kernels
+import numpy as np
+
+from solver import contact, kernels
 from solver.absorbing import AbsorbingFaces
 from solver.damping import Damping
 from solver.thermal import make_conduction, make_expansion
 from solver.fbar import FBar
 
-POINTS = ("begin_step", "after_forces", "before_update", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
+POINTS = ("begin_step", "after_weights", "after_forces", "before_update", "constrain", "after_g2p", "after_kinematics", "after_stress", "end_step")
 
 
 class Hooks:
@@ -51,6 +56,14 @@ class Hooks:
         for hook in hooks:
             self.add(hook)
 
+    def series(self) -> dict[str, float]:
+        """The time series of the hooks that log one (`series()`: the contact's pair forces)."""
+        out = {}
+        for hook in self._hooks:
+            if hasattr(hook, "series"):
+                out.update(hook.series())
+        return out
+
     def add(self, hook) -> None:
         self._hooks.append(hook)
         for point in POINTS:
@@ -60,17 +73,40 @@ class Hooks:
 
 
 class GridConditions:
-    """The scene's boundary conditions (walls, velocity conditions, the axis r = 0) as a hook."""
+    """The scene's boundary conditions (walls, velocity conditions, the axis r = 0) as a hook,
+    on every velocity field of the grid. Frictional walls act as contact does (solver/contact.py):
+    on v~_I^{t+dt} and MUSL's remapped velocity, not on v_I^t; the prescribed components win."""
 
-    def __init__(self, constraints):
-        self.constraints = constraints
+    def __init__(self, sim):
+        self.sim, self.constraints, self.grid = sim, sim.constraints, sim.grid
+        self._dissipated = np.zeros(1)
 
     def begin_step(self, sim, t_end: float) -> None:
         self.constraints.set_time(t_end)
 
     def constrain(self, grid_mass, v, record: bool) -> float:
-        c = self.constraints
-        return kernels.apply_dirichlet(c.node, c.axis, c.value, grid_mass, v)
+        c, g = self.constraints, self.grid
+        if g.fields == 1 and not c.friction_node.size:   # the common scene: as cheap as it was
+            return kernels.apply_dirichlet(c.node, c.axis, c.value, grid_mass, v)
+        work = 0.0
+        walls = c.friction_node.size > 0 and v is not g.v_old
+        self._dissipated[0] = 0.0
+        for mass_f, v_f in zip(g.field_views(grid_mass), g.field_views(v)):
+            if walls:
+                contact.friction_wall(c.friction_node, c.friction_axis, c.friction_sign, c.friction_mu, v_f, mass_f,
+                                      self._dissipated)
+            work += kernels.apply_dirichlet(c.node, c.axis, c.value, mass_f, v_f)
+        if record:
+            self.sim.friction_work += float(self._dissipated[0])
+        return work
+
+
+class RigidMotion:
+    """The rigid bodies when contact has a field per body: they move as prescribed and their
+    fields meet the others in the contact (which counts their reactions); nothing is imposed."""
+
+    def __init__(self, rigid):
+        self.begin_step, self.end_step = rigid.begin_step, rigid.end_step
 
 
 class ExternalWork:
@@ -82,11 +118,17 @@ class ExternalWork:
 
 
 def _rigid_bodies(sim):
-    return sim.rigid if sim.rigid.any else None
+    if not sim.rigid.any:
+        return None
+    return RigidMotion(sim.rigid) if sim.scene.contact.fields else sim.rigid
+
+
+def _field_contact(sim):
+    return contact.FieldContact(sim) if sim.scene.contact.fields else None
 
 
 def _grid_conditions(sim):
-    return GridConditions(sim.constraints)
+    return GridConditions(sim)
 
 
 def _hoop_terms(sim):
@@ -120,12 +162,13 @@ def _damping(sim):
 
 
 # Each entry makes the hook a scene needs (or None). The order is the order their effects
-# compose in: rigid bodies impose before the boundary conditions, which win where both
-# apply; the loads' work is counted after the rigid bodies moved; damping acts on the
-# forces of every other hook; F-bar averages the volume after the hoop terms changed it and
-# puts the particles' own F, L and V back after every other stress hook.
-HOOKS = [_rigid_bodies, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _absorbing_faces, _damping,
-         make_conduction, make_expansion, _fbar, _shape_hook]
+# compose in: rigid bodies impose (or the bodies' fields meet, rigid ones included) before
+# the boundary conditions, which win where both apply; the loads' work is counted after the
+# rigid bodies moved; damping acts on the forces of every other hook; F-bar averages the
+# volume after the hoop terms changed it and puts the particles' own F, L and V back after
+# every other stress hook.
+HOOKS = [_rigid_bodies, _field_contact, _grid_conditions, _hoop_terms, _external_work, _applied_loads,
+         _absorbing_faces, _damping, make_conduction, make_expansion, _fbar, _shape_hook]
 
 
 def scene_hooks(sim) -> Hooks:

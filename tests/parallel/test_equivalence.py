@@ -36,11 +36,15 @@ CASES = {
     # CPDI's 4-node stencil and deformed domains across the slab boundaries
     "cpdi": scene(SCENE_2D, method__shape_function="cpdi_r4"),
     "cpdi-q4": scene(SCENE_2D, method__shape_function="cpdi_q4"),   # tracked corners migrate with particles
+    # a field per body (solver/contact.py): the fields and the normals cross the halo
+    "contact": scene(SCENE_2D, contact={"model": "friction", "friction": 0.3},
+                     boundary_conditions=[{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.2}]),
+    "contact-rigid": scene(RIGID_2D, contact={"model": "friction", "friction": 0.2}),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2),
-        ("heat", 2), ("heat", 3)]
+        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2)]
 
 
 @pytest.fixture(scope="module")

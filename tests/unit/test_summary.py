@@ -44,6 +44,14 @@ def test_two_disk_memory_and_run_time():
     assert summary.estimated_run_seconds == pytest.approx(416 * 3500 / 1e7, rel=1e-12)
 
 
+def test_contact_fields_multiply_the_grid_memory():
+    scene = two_disks()
+    scene["contact"] = {"model": "friction"}
+    summary = summarize(load_scene(scene))
+    # two bodies: two fields of (7 + presence 1 + normal 2) values per node
+    assert summary.memory_bytes == 416 * (42 * 8 + 4) + 2 * 441 * 10 * 8
+
+
 def test_adaptive_step_estimate():
     summary = summarize(load_scene(two_disks(dt=None)))
     # dt = cfl h / (c + |v|max): c = 1.1602 (E2 [derived]), |v| = 0.1 sqrt(2)

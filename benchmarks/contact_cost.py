@@ -1,0 +1,85 @@
+"""The cost of contact with a field per body against the single field, side by side.
+
+    python benchmarks/contact_cost.py                    # two disks (E2) in contact, 1 thread
+    python benchmarks/contact_cost.py --scale 4 --repeats 5 --threads 2
+
+The scene is examples/two_disks.json (--scale k: cells k times smaller and the disks'
+particles k^2 times more), advanced to t = 1.55 s, where the disks touch (from 1.525 s), then timed over
+--steps steps in three variants, alternately, --repeats times each: the single field as
+the scene steps it (the fused backend), the single field on the general backend (the
+one contact uses), and `"contact": {"model": "friction", "friction": 0.3}`. The table
+gives each variant's median time per step and the ratios contact / single field; the
+spread is max/min - 1 of the repeats (the machine's noise at that moment).
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import statistics
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def scene(scale: int, threads: int, contact: bool) -> dict:
+    s = json.loads((ROOT / "examples" / "two_disks.json").read_text())
+    s["grid"]["cell_size"] /= scale
+    s["time"]["dt"] /= scale
+    s["parallel"] = {"threads": threads}
+    if contact:
+        s["contact"] = {"model": "friction", "friction": 0.3}
+    return s
+
+
+def placed(variant: str, scale: int, threads: int):
+    from solver.scene import load_scene
+    from solver.stepper import ExplicitMPM
+    s = load_scene(scene(scale, threads, variant == "contact"))
+    sim = ExplicitMPM(s, general=variant != "fused")
+    while sim.time < 1.55:   # the disks touch from 1.525 s
+        sim.advance(s.time.dt)
+    return sim, s.time.dt
+
+
+def time_per_step(sim, dt: float, steps: int) -> float:
+    state = copy.deepcopy(sim.particles)   # every repeat steps the same stretch of the impact
+    start = time.perf_counter()
+    for _ in range(steps):
+        sim.advance(dt)
+    elapsed = (time.perf_counter() - start) / steps
+    sim.particles.replace(state.arrays())
+    sim.time -= steps * dt
+    sim._place_particles()
+    return elapsed
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--scale", type=int, default=1)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    variants = ("fused", "general", "contact")
+    sims = {v: placed(v, args.scale, args.threads) for v in variants}
+    for v in variants:
+        time_per_step(*sims[v], 10)   # warm
+    times = {v: [] for v in variants}
+    for _ in range(args.repeats):
+        for v in variants:
+            times[v].append(time_per_step(*sims[v], args.steps))
+    particles = sims["contact"][0].particles.count
+    print(f"two disks x{args.scale}: {particles} particles, {args.threads} thread(s), {args.steps} steps, "
+          f"{args.repeats} repeats")
+    median = {v: statistics.median(t) for v, t in times.items()}
+    for v in variants:
+        spread = max(times[v]) / min(times[v]) - 1
+        print(f"  {v:8s} {median[v] * 1e6:9.1f} us/step   spread {spread:5.1%}")
+    print(f"  contact / single field (fused)   {median['contact'] / median['fused']:.2f}")
+    print(f"  contact / single field (general) {median['contact'] / median['general']:.2f}")
+
+
+if __name__ == "__main__":
+    main()
