@@ -183,3 +183,20 @@ def test_fields_beyond_memory_are_refused(monkeypatch):
 def test_density_normals_with_processes_are_refused():
     found = problems({"model": "friction", "normals": "density_gradient"}, parallel={"processes": 2})
     assert "with several processes" in found["contact.normals"]
+
+
+def test_one_field_features_are_refused_with_a_field_per_body():
+    """Conduction, absorbing faces and cpdi_q4 keep one grid field: refused, each at its path."""
+    conducting = {"m": {**BASE["materials"]["m"], "thermal_conductivity": 1.0, "specific_heat": 1.0}}
+    assert "heat conduction" in problems({"model": "friction"}, materials=conducting)["contact.model"]
+    scene = copy.deepcopy(BASE)
+    scene["contact"] = {"model": "friction"}
+    scene["boundary_conditions"] = [{"type": "absorbing", "face": "x+"}]
+    with pytest.raises(SceneError) as error:
+        load_scene(scene)
+    found = {e["path"]: e["message"] for e in error.value.errors}
+    assert "with contact 'friction'" in found["boundary_conditions[0].type"]
+    found = problems({"model": "friction"}, method={"shape_function": "cpdi_q4"})
+    assert "with contact 'friction'" in found["method.shape_function"]
+    load_scene({**BASE, "materials": conducting})   # each is fine with the single field
+    load_scene({**BASE, "method": {"shape_function": "cpdi_q4"}})

@@ -63,20 +63,21 @@ def test_no_doc_calls_an_implemented_feature_not_supported(doc, paragraph):
 
 
 def test_the_unsupported_example_of_scene_md_is_what_validation_says():
-    """docs/scene.md quotes the error of an unsupported wall mode: the solver gives it."""
+    """docs/scene.md quotes the error of an unsupported feature (too many processes): the
+    solver gives it, word for word."""
     from solver.scene import SceneError, load_scene
-    quoted = re.search(r"`(boundary_conditions\[0\]\.mode): '(\w+)' is not supported yet`",
+    quoted = re.search(r"`(parallel\.processes): ((\d+) processes is not supported yet \(at most \d+\))`",
                        (ROOT / "docs" / "scene.md").read_text(encoding="utf-8"))
     assert quoted, "docs/scene.md no longer quotes the unsupported-feature error"
-    path, mode = quoted.groups()
+    path, message, processes = quoted.groups()
     scene = {"dimension": 2, "grid": {"lower": [0, 0], "upper": [1, 1], "cell_size": 0.1},
              "materials": {"m": {"model": "linear_elastic", "density": 1, "youngs_modulus": 1, "poisson_ratio": 0.3}},
              "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.2, 0.2], "upper": [0.4, 0.4]}}],
-             "boundary_conditions": [{"type": "wall", "face": "y-", "mode": mode}],
+             "parallel": {"processes": int(processes)},
              "time": {"end": 1.0}}
     with pytest.raises(SceneError) as refused:
         load_scene(scene)
-    assert {"path": path, "message": f"{mode!r} is not supported yet"} in refused.value.errors
+    assert {"path": path, "message": message} in refused.value.errors
 
 
 def table_first_cells(text: str, header: str) -> list[str]:
