@@ -308,6 +308,7 @@ class _OwnedConstraints:
         self.node = np.ascontiguousarray(coords @ local_strides, dtype=np.int64)
         self.axis = np.ascontiguousarray(whole.axis[keep])
         self.value = np.ascontiguousarray(whole.value[keep])
+        self.condition = whole.condition[keep]
         self.time_dependent = whole.time_dependent
 
     def set_time(self, t: float) -> None:

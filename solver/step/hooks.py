@@ -53,17 +53,25 @@ class Hooks:
 
 
 class GridConditions:
-    """The scene's boundary conditions (walls, velocity conditions, the axis r = 0) as a hook."""
+    """The scene's boundary conditions (walls, velocity conditions, the axis r = 0) as a hook;
+    with `reactions` (solver/boundary.py, the `reactions` series) their impulses are counted."""
 
-    def __init__(self, constraints):
+    def __init__(self, constraints, reactions=None):
         self.constraints = constraints
+        self.reactions = reactions
 
     def begin_step(self, sim, t_end: float) -> None:
         self.constraints.set_time(t_end)
 
     def constrain(self, grid_mass, v, record: bool) -> float:
         c = self.constraints
+        if record and self.reactions is not None:
+            self.reactions.record(c, grid_mass, v)
         return kernels.apply_dirichlet(c.node, c.axis, c.value, grid_mass, v)
+
+    def end_step(self, sim, dt: float) -> None:
+        if self.reactions is not None:
+            self.reactions.elapsed += dt
 
 
 class ExternalWork:
@@ -79,7 +87,7 @@ def _rigid_bodies(sim):
 
 
 def _grid_conditions(sim):
-    return GridConditions(sim.constraints)
+    return GridConditions(sim.constraints, sim.condition_reactions)
 
 
 def _hoop_terms(sim):

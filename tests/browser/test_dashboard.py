@@ -79,11 +79,12 @@ def test_submit_through_the_form_and_watch_it_succeed(page: Page, example, scree
     expect(image).to_be_visible()
     page.wait_for_function("document.querySelector('img.preview-image').naturalWidth > 0")
 
-    # the energy plot: kinetic, strain and total, each a line of many points
+    # the energy plot: kinetic, strain, total and the balance, each a line of many points, and the balance error
     lines = page.locator("svg.energy-plot polyline.series")
-    expect(lines).to_have_count(3)
-    for i in range(3):
+    expect(lines).to_have_count(4)
+    for i in range(4):
         assert len(lines.nth(i).get_attribute("points").split()) > 100
+    expect(page.locator("p.balance-error")).to_contain_text("Energy balance error now:")
 
     # frames and fields of the finished job
     slider = page.get_by_label("frame")

@@ -151,7 +151,7 @@ def test_run_with_a_bar_into_the_default_folder(tmp_path, monkeypatch, capsys):
 
 
 def test_run_that_becomes_unstable_exits_3_with_the_diagnostic(tmp_path, capsys):
-    scene = tiny_bar(end=20.0, dt=1.0)  # CFL 6.4
+    scene = tiny_bar(end=20.0, dt=1.0, allow_unstable_dt=True)  # CFL 6.4: validation would refuse it
     code = cli.main(["run", scene_file(tmp_path, scene), "-o", str(tmp_path / "o"), "--progress", "none"])
     assert code == 3
     err = capsys.readouterr().err
