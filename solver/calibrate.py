@@ -2,12 +2,13 @@
 
 Every figure is a time per step of a small block of particles stepped in this process
 (numba's cache warm: two untimed steps first, which compile a variant that is not in
-the cache), the best of five repeats of enough steps for about REPEAT_SECONDS each:
+the cache), the median of REPEATS repeats of enough steps for about REPEAT_SECONDS each:
 
   a_d, b_d   the fixed and per-node cost of a step: the linear elastic block at two
              particle counts on one grid, and on a grid with four times the nodes
   c_k        per particle, each (dimension, backend, formulation, shape function)
   m_model    what each material adds per particle over linear elasticity
+  body force the evaluation of body_force expressions, per particle and instruction
   factors    transfers and schemes against FLIP and MUSL, axisymmetry (2D)
   threads    the base blocks on all the cores this process may use, against one
   frames     a run() with 42 frames against one with 2, per particle and frame
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import json
 import platform
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -32,7 +34,12 @@ from solver import shape as shape_functions
 from solver.cost import CostModel, ThreadScaling, calibration_path
 from solver.thread_count import available_cores
 
-REPEAT_SECONDS = 0.15
+REPEAT_SECONDS = 0.1
+# the median of this many: the machine's typical speed, with the load it has while calibrating
+# (the best of them measured a quiet moment, and estimates came out 2-4x short of whole runs)
+REPEATS = 7
+# a transfer's, scheme's or axisymmetry's factor outside this range is noise, not a measurement
+FACTOR_RANGE = (0.25, 4.0)
 BLOCK_PARTICLES = {1: 3000, 2: 6000, 3: 6000}   # the large block; the small one has an eighth
 H = 0.1
 PPC = 2
@@ -92,8 +99,8 @@ def step_seconds(document: dict, general: bool = False) -> tuple[float, int, int
 
     advance(2)
     steps = int(min(200, max(3, REPEAT_SECONDS / max(advance(1), 1e-6))))
-    best = min(advance(steps) for _ in range(5)) / steps
-    return best, sim.particles.count, sim.grid.n_nodes
+    typical = statistics.median(advance(steps) for _ in range(REPEATS)) / steps
+    return typical, sim.particles.count, sim.grid.n_nodes
 
 
 def _fixed_and_nodes(dim: int, backend: str) -> tuple[float, float, float, dict]:
@@ -179,13 +186,42 @@ def measure_factors(model: dict, log) -> None:
         general = backend == "general"
         case = _per_particle(model, dim, backend, *step_seconds(block_scene(dim, big, **method), general))
         ref = _per_particle(model, dim, backend, *step_seconds(block_scene(dim, big, **reference), general))
-        model["factors"][f"{backend}/{name}"] = case / ref if ref > 0 else 1.0
-        log(f"{backend}/{name}: x {model['factors'][f'{backend}/{name}']:.2f}")
+        _set_factor(model, f"{backend}/{name}", case, ref, log)
     document = block_scene(dim, big)
     document["axisymmetric"] = True
     axisymmetric = _per_particle(model, dim, "general", *step_seconds(document))
-    model["factors"]["axisymmetric"] = axisymmetric / model["particle_seconds"]["2/general/ulmpm/linear"]
-    log(f"axisymmetric: x {model['factors']['axisymmetric']:.2f}")
+    _set_factor(model, "axisymmetric", axisymmetric, model["particle_seconds"]["2/general/ulmpm/linear"], log)
+
+
+def _set_factor(model: dict, key: str, case: float, reference: float, log) -> None:
+    factor = case / reference if reference > 0 else 1.0
+    if not FACTOR_RANGE[0] <= factor <= FACTOR_RANGE[1]:
+        log(f"{key}: x {factor:.2f} is outside {FACTOR_RANGE} (a disturbed measurement): 1 is stored")
+        factor = 1.0
+    model["factors"][key] = factor
+    log(f"{key}: x {factor:.2f}")
+
+
+# a body force of about 100 instructions, mostly arithmetic with a few functions, as manufactured
+# solutions are (examples/vortex_2d.json has 840 instructions, mms_square_2d.json 194)
+# (small: the block must stay on its grid)
+BODY_FORCE = " + ".join(f"1e-6 * (({k + 1} * (x * x + y * y) ** 2 / (1 + x) - 3 * y * t) * sqrt(1 + x * x) - sin(y))"
+                        for k in range(4))
+
+
+def measure_expressions(model: dict, log) -> None:
+    """The body force's evaluation per particle, step and instruction (2D fused block)."""
+    from solver.expressions import compile_expression
+    from solver.scene import BODY_FORCE_VARIABLES
+
+    plain = block_scene(2, BLOCK_PARTICLES[2])
+    loaded = block_scene(2, BLOCK_PARTICLES[2])
+    loaded["body_force"] = [BODY_FORCE, "0"]
+    base, particles, _ = step_seconds(plain)
+    with_force, _, _ = step_seconds(loaded)
+    operations = compile_expression(BODY_FORCE, BODY_FORCE_VARIABLES).operations
+    model["expression_seconds"] = max(with_force - base, 0.0) / (particles * operations)
+    log(f"body force: {1e9 * model['expression_seconds']:.2f} ns a particle and instruction ({operations} instructions)")
 
 
 def measure_threads(model: dict, log) -> None:
@@ -212,28 +248,54 @@ def measure_frames(model: dict, log) -> None:
         document["time"] = {"end": 40 * 1e-4, "dt": 1e-4}
         document["output"] = {"frames": frames, "energies": False}
         with tempfile.TemporaryDirectory(prefix="mpm-calibrate-") as tmp:
-            walls[frames] = min(run(document, tmp).wall_seconds for _ in range(2))
+            walls[frames] = statistics.median(run(document, tmp).wall_seconds for _ in range(3))
     particles = step_seconds(block_scene(2, BLOCK_PARTICLES[2]))[1]
     model["frame_particle_seconds"] = max(walls[42] - walls[2], 0.0) / (40 * particles)
     log(f"frames: {1e9 * model['frame_particle_seconds']:.0f} ns a particle and frame")
 
 
-def measure_startup(model: dict, log) -> None:
-    """`python -m solver run` of a 2D block of a few particles for a few steps, as mpm run does."""
-    document = block_scene(2, 32)
-    document["time"] = {"end": 3e-4, "dt": 1e-4}
-    document["output"] = {"frames": 2}
+def _run_seconds(document: dict, repeats: int) -> float:
+    """Median wall time of `python -m solver run` of a scene, from the command to its exit."""
     walls = []
     with tempfile.TemporaryDirectory(prefix="mpm-calibrate-") as tmp:
         path = Path(tmp) / "tiny.json"
         path.write_text(json.dumps(document))
-        for _ in range(3):
+        for _ in range(repeats):
             start = time.perf_counter()
             subprocess.run([sys.executable, "-m", "solver", "run", str(path), "-o", str(Path(tmp) / "out"),
                             "--progress", "none"], check=True, capture_output=True)
             walls.append(time.perf_counter() - start)
-    model["startup_seconds"] = min(walls[1:])   # the first may compile
+    return statistics.median(walls)
+
+
+def _tiny(dim: int, **method) -> dict:
+    document = block_scene(dim, 4**dim, **method)
+    document["time"] = {"end": 3e-4, "dt": 1e-4}
+    document["output"] = {"frames": 2}
+    return document
+
+
+def measure_startup(model: dict, log) -> None:
+    """`python -m solver run` of a few particles for a few steps, as mpm run does: the 2D fused
+    block, then what each other kind adds (kernels that numba compiles in every process: the
+    weights of shape functions passed as first-class functions are not cached)."""
+    _run_seconds(_tiny(2), 1)   # compiles what the cache lacks
+    model["startup_seconds"] = _run_seconds(_tiny(2), 3)
     log(f"start-up: {model['startup_seconds']:.2f} s")
+    for dim in (1, 2, 3):
+        for backend, formulation, name in _kinds(dim):
+            document = _tiny(dim, formulation=formulation, shape_function=name)
+            general = backend == "general" and dim > 1 and name in fused_scope.FUSED_SHAPES
+            if general:   # the general backend for a shape the fused one has: a rigid body forces it
+                continue
+            try:
+                _run_seconds(document, 1)
+                extra = max(_run_seconds(document, 1) - model["startup_seconds"], 0.0)
+            except subprocess.CalledProcessError as error:   # a disturbed run: this kind adds nothing known
+                log(f"start-up {dim}/{backend}/{name}: failed ({error.stderr.decode()[-200:]!r}); not stored")
+                continue
+            model["startup_extra_seconds"][f"{dim}/{backend}/{name}"] = extra
+            log(f"start-up {dim}/{backend}/{name}: + {extra:.2f} s")
 
 
 def calibrate(log=print) -> CostModel:
@@ -241,11 +303,12 @@ def calibrate(log=print) -> CostModel:
     model = {"machine": f"{platform.node()} ({available_cores()} cores, {platform.processor() or platform.machine()})",
              "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
              "step_seconds": {}, "node_seconds": {}, "particle_seconds": {}, "material_seconds": {},
-             "factors": {}, "thread_scaling": {}}
+             "factors": {}, "thread_scaling": {}, "startup_extra_seconds": {}}
     for dim in (1, 2, 3):
         measure_kinds(model, dim, log)
     measure_materials(model, log)
     measure_factors(model, log)
+    measure_expressions(model, log)
     measure_threads(model, log)
     measure_frames(model, log)
     measure_startup(model, log)

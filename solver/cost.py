@@ -28,7 +28,9 @@ from pathlib import Path
 from pydantic import BaseModel, Field
 
 from solver import fused_scope
+from solver.expressions import compile_expression
 from solver import shape as shape_functions
+from solver.scene import BODY_FORCE_VARIABLES
 from solver.thread_count import pool_size, requested_threads
 
 SHIPPED = Path(__file__).with_name("cost_model.json")
@@ -46,10 +48,14 @@ class ThreadScaling(BaseModel):
     speedup: float = Field(description="time with one thread / time with `threads`")
 
     def at(self, threads: int) -> float:
-        """Speed-up at `threads` by Amdahl's law, its parallel share p from the measurement."""
+        """Speed-up at `threads` by Amdahl's law, its parallel share p from the measurement. A
+        measured speed-up below 1 (threads that waited for each other on a busy machine) is
+        taken as it is, for any thread count above 1."""
         if threads <= 1 or self.threads <= 1:
             return 1.0
-        measured = min(max(self.speedup, 1.0), float(self.threads))
+        if self.speedup < 1.0:
+            return self.speedup
+        measured = min(self.speedup, float(self.threads))
         p = (1.0 - 1.0 / measured) / (1.0 - 1.0 / self.threads)
         return 1.0 / ((1.0 - p) + p / threads)
 
@@ -59,12 +65,17 @@ class CostModel(BaseModel):
     machine: str = Field("", description="where it was measured (host name, cores)")
     measured_at: str = ""
     startup_seconds: float = Field(description="a run of a tiny scene, from the command to its exit")
+    startup_extra_seconds: dict[str, float] = Field(
+        default_factory=dict, description="'<dim>/<backend>/<shape>': what a run of that kind adds to the start-up "
+                                          "(kernels that compile in every process)")
     frame_particle_seconds: float = Field(description="per particle and output frame")
     step_seconds: dict[str, float] = Field(description="'<dim>/<backend>': fixed cost of a step")
     node_seconds: dict[str, float] = Field(description="'<dim>/<backend>': per grid node and step")
     particle_seconds: dict[str, float] = Field(
         description="'<dim>/<backend>/<formulation>/<shape>': per particle and step, linear elastic, flip, musl")
     material_seconds: dict[str, float] = Field(description="'<dim>/<model>': added per particle and step")
+    expression_seconds: float = Field(0.0, description="per particle, step and instruction of the body_force "
+                                                       "expressions (evaluated at every particle every step)")
     factors: dict[str, float] = Field(description="'<backend>/<transfer or scheme>', 'axisymmetric': "
                                                   "multiply the per-particle cost")
     thread_scaling: dict[str, ThreadScaling] = Field(description="'<dim>/<backend>'")
@@ -137,6 +148,13 @@ def particle_step_seconds(model: CostModel, scene, backend: str) -> float:
     return base * factor
 
 
+def _expression_seconds(model: CostModel, scene) -> float:
+    """Per particle and step: the body_force expressions, evaluated with numpy in the step."""
+    operations = sum(compile_expression(c, BODY_FORCE_VARIABLES).operations
+                     for c in scene.body_force or () if isinstance(c, str))
+    return model.expression_seconds * operations
+
+
 def estimate_seconds(scene, particles_per_body: list[int], nodes: int, steps: int,
                      model: CostModel | None = None) -> float:
     """Wall time of a run from start to exit, with numba's cache warm."""
@@ -155,7 +173,10 @@ def estimate_seconds(scene, particles_per_body: list[int], nodes: int, steps: in
     speedup = scaling.at(threads) if scaling is not None else 1.0
     fixed, _ = _lookup(model.step_seconds, f"{dim}/{backend}", [f"{dim}/general", "2/general"])
     per_node, _ = _lookup(model.node_seconds, f"{dim}/{backend}", [f"{dim}/general", "2/general"])
-    step = fixed + (per_node * nodes + per_particle * particles + material_time) / speedup
+    step = fixed + (per_node * nodes + (per_particle + _expression_seconds(model, scene)) * particles
+                    + material_time) / speedup
     frames = model.frame_particle_seconds * particles * scene.output.frames
-    return model.startup_seconds + frames + steps * step
+    startup = model.startup_seconds + model.startup_extra_seconds.get(
+        f"{dim}/{backend}/{scene.method.shape_function}", 0.0)
+    return startup + frames + steps * step
 

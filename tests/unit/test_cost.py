@@ -76,3 +76,35 @@ def test_the_shipped_model_covers_every_backend_and_material():
             assert f"{dim}/{backend}" in model.step_seconds and f"{dim}/{backend}/ulmpm/linear" in model.particle_seconds
     for name in ("neo_hookean", "j2_plasticity", "johnson_cook", "fluid", "ideal_gas"):
         assert f"2/{name}" in model.material_seconds and f"3/{name}" in model.material_seconds
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_every_calibration_block_is_a_valid_scene_of_the_size_asked(dim):
+    from solver import calibrate
+    from solver.summary import summarize
+
+    for material in calibrate.MATERIALS:
+        summary = summarize(load_scene(calibrate.block_scene(dim, calibrate.BLOCK_PARTICLES[dim], material=material)))
+        assert 0.5 < summary.particles / calibrate.BLOCK_PARTICLES[dim] < 2
+    small = summarize(load_scene(calibrate.block_scene(dim, 1000)))
+    wide = summarize(load_scene(calibrate.block_scene(dim, 1000, grid_factor=4.0)))
+    assert wide.particles == small.particles and 3 < wide.grid_nodes / small.grid_nodes < 5
+
+
+def test_threads_that_measured_slower_than_one_stay_slower():
+    assert cost.ThreadScaling(threads=2, speedup=0.5).at(4) == 0.5 and cost.ThreadScaling(threads=2, speedup=0.5).at(1) == 1
+
+
+def test_body_force_expressions_and_the_kinds_start_up_are_counted():
+    from solver.expressions import compile_expression
+
+    model = MODEL.model_copy(update={"expression_seconds": 2e-9, "startup_extra_seconds": {"2/general/gimp": 3.0}})
+    document = scene(shape_function="gimp")
+    document["body_force"] = ["sin(x) * t", 0.0]
+    s = load_scene(document)
+    plain = load_scene(scene(shape_function="gimp"))
+    operations = compile_expression("sin(x) * t", ("x", "y", "z", "X", "Y", "Z", "t")).operations
+    difference = cost.estimate_seconds(s, [100, 300], 121, 50, model) - cost.estimate_seconds(plain, [100, 300], 121, 50, model)
+    assert difference == pytest.approx(50 * 2e-9 * operations * 400, rel=1e-9)
+    assert cost.estimate_seconds(plain, [100, 300], 121, 50, model) - cost.estimate_seconds(plain, [100, 300], 121, 50, MODEL) \
+        == pytest.approx(3.0)

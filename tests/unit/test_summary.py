@@ -131,3 +131,15 @@ def test_no_allocation_proportional_to_the_scene():
         tracemalloc.stop()
     assert summary.particles == 8_000_000
     assert peak < 50e6
+
+
+def test_a_flip_blend_below_one_on_a_long_elastic_run_is_warned_about():
+    # two disks, c = 1.16, longest side 0.4: one axial period 4 * 0.4 / 1.16 = 1.4 < end = 3.5
+    warnings = summarize(load_scene(two_disks())).warnings
+    assert [w["path"] for w in warnings] == ["method.flip_ratio"] and "7.6 %" in warnings[0]["message"]
+    for change in ({"method": {"transfer": "flip", "flip_ratio": 1.0}}, {"method": {"transfer": "pic"}},
+                   {"damping": {"type": "viscous", "coefficient": 0.1}}):
+        assert summarize(load_scene({**two_disks(), **change})).warnings == []
+    short = two_disks()
+    short["time"]["end"] = 1.0   # less than one period: nothing to damp yet
+    assert summarize(load_scene(short)).warnings == []
