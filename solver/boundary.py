@@ -38,12 +38,12 @@ def face_material(scene, face: str):
 
 class Constraints:
     def __init__(self, scene, grid):
-        nodes, axes, values, expressions = [], [], [], []
+        nodes, axes, values, expressions, conditions = [], [], [], [], []
         friction = []   # (nodes, axis, outward sign, mu) of each frictional wall
         positions = grid.node_positions()
         dim = scene.dimension
         tol = 1e-9 * float(np.min(grid.h))
-        for bc in scene.boundary_conditions:
+        for number, bc in enumerate(scene.boundary_conditions):
             if bc.type == "wall":
                 axis = AXES[bc.face[0]]
                 on_face = face_nodes(grid, bc.face)
@@ -57,6 +57,7 @@ class Constraints:
                     axes.append(np.full(sel.size, a))
                     values.append(np.zeros(sel.size))
                     expressions.append(None)
+                    conditions.append(np.full(sel.size, number))
             elif bc.type == "velocity":
                 lower = np.asarray(bc.where.lower) - tol
                 upper = np.asarray(bc.where.upper) + tol
@@ -67,6 +68,7 @@ class Constraints:
                         continue
                     nodes.append(sel)
                     axes.append(np.full(sel.size, a))
+                    conditions.append(np.full(sel.size, number))
                     if isinstance(component, str):
                         values.append(np.zeros(sel.size))
                         expressions.append(compile_expression(component, ("t",)))
@@ -79,10 +81,13 @@ class Constraints:
             axes.append(np.zeros(sel.size, dtype=np.int64))
             values.append(np.zeros(sel.size))
             expressions.append(None)
+            conditions.append(np.full(sel.size, -1))   # not a condition of the scene: no reaction series
         self._blocks = list(zip(values, expressions))
         self.node = np.ascontiguousarray(np.concatenate(nodes) if nodes else np.zeros(0, np.int64), dtype=np.int64)
         self.axis = np.ascontiguousarray(np.concatenate(axes) if axes else np.zeros(0, np.int64), dtype=np.int64)
         self.value = np.ascontiguousarray(np.concatenate(values) if values else np.zeros(0))
+        # the index in scene.boundary_conditions of each (node, axis) entry, for its reaction
+        self.condition = np.concatenate(conditions).astype(np.int64) if conditions else np.zeros(0, np.int64)
         self._offsets = np.cumsum([0] + [v.size for v in values])
         self.set_friction_walls(*_friction_columns(friction))
         self.time_dependent = any(e is not None for e in expressions)
@@ -108,3 +113,41 @@ def _friction_columns(walls):
             np.repeat([w[1] for w in walls], sizes).astype(np.int64),
             np.repeat([w[2] for w in walls], sizes).astype(np.float64),
             np.repeat([w[3] for w in walls], sizes).astype(np.float64))
+
+
+class ConditionReactions:
+    """The force of the material on each boundary condition (walls, velocity conditions), as
+    rigid bodies' reactions are counted (solver/rigid.py): the constraint impulse
+    m_I (v_bar - v~_I) on v~_I^{t+dt}, summed over the condition's nodes, is the force times dt
+    that the condition applies to the material; its reaction is the opposite, averaged over
+    the steps between two series rows. Where two conditions fix the same node and axis the
+    first imposes the value and takes the impulse (the second finds it imposed already)."""
+
+    def __init__(self, scene):
+        self.impulse = np.zeros((len(scene.boundary_conditions), scene.dimension))
+        self.elapsed = 0.0
+        self._entries = (None, None)   # (the constraints' node array, the entries that take an impulse)
+
+    def _first_entries(self, c, dim: int) -> np.ndarray:
+        """The first entry of a scene's condition on each (node, axis): found once per placed grid."""
+        if self._entries[0] is not c.node:
+            mine = np.flatnonzero(c.condition >= 0)
+            _, first = np.unique(c.node[mine] * dim + c.axis[mine], return_index=True)
+            self._entries = (c.node, mine[first])
+        return self._entries[1]
+
+    def record(self, constraints, grid_mass, v) -> None:
+        """Before the conditions are imposed on v~^{t+dt}: add their impulses."""
+        c = constraints
+        entries = self._first_entries(c, v.shape[1])
+        node, axis = c.node[entries], c.axis[entries]
+        np.add.at(self.impulse, (c.condition[entries], axis), grid_mass[node] * (c.value[entries] - v[node, axis]))
+
+    def reactions(self, domain) -> dict[str, float]:
+        """reaction_bc<i>_<axis>: mean force of the material on boundary_conditions[i] since the last call."""
+        impulse = domain.sum(self.impulse)
+        force = -impulse / self.elapsed if self.elapsed > 0 else np.zeros_like(impulse)
+        self.impulse[:] = 0.0
+        self.elapsed = 0.0
+        return {f"reaction_bc{i}_{'xyz'[a]}": float(force[i, a])
+                for i in range(force.shape[0]) for a in range(force.shape[1])}

@@ -188,10 +188,33 @@ def cmd_run(args: argparse.Namespace) -> int:
             f"{done['status']}: {done['steps']} steps, t = {done['time']:.6g} "
             f"in {human_seconds(done['wall_seconds'])} -> {done['result_path']}"
         )
+        balance = _balance_line(done["result_path"])
+        if balance:
+            print(balance)
     if done["status"] == "complete":
         return EXIT_OK
     print(f"mpm run: the run ended early ({done['reason']}): {done['message']}", file=sys.stderr)
     return EXIT_PARTIAL
+
+
+def _balance_line(result_path: str) -> str | None:
+    """'energy balance: ...' from the result's series (solver/energy.py), None without energies."""
+    import numpy as np
+
+    from solver.results import read_series
+
+    try:
+        series = read_series(result_path)
+    except (OSError, KeyError, ValueError):
+        return None
+    if len(series.get("energy_error", ())) == 0:
+        return None
+    error = float(series["energy_error"][-1])
+    scale = max(float(np.nanmax(np.abs(series[name]))) for name in ("total_energy", "external_work", "boundary_work")
+                if name in series)
+    share = f" ({100 * abs(error) / scale:.3g} % of the largest energy)" if scale > 0 else ""
+    return (f"energy balance: total {float(series['total_energy'][-1]):.6g}, "
+            f"error {error:.3g}{share} (stored energy - work done on the bodies, against t = 0)")
 
 
 def _exec_processes(processes: int, args: argparse.Namespace) -> None:
@@ -246,12 +269,21 @@ def cmd_validate(args: argparse.Namespace) -> int:
         ("time step", f"{summary.dt:.6g}" + ("" if scene.time.dt else "  (adaptive, estimated)")),
         ("estimated steps", f"{summary.estimated_steps:,}"),
         ("memory", human_bytes(summary.memory_bytes)),
-        ("estimated run time", human_seconds(summary.estimated_run_seconds)),
+        ("estimated run time", human_seconds(summary.estimated_run_seconds) + f"  ({_cost_model_source()})"),
     ]
     print(f"{args.scene}: valid {scene.dimension}D scene {scene.name!r}")
     for label, value in rows:
         print(f"  {label:<20}{value}")
+    for warning in summary.warnings:
+        print(f"  warning: {warning['path']}: {warning['message']}")
     return EXIT_OK
+
+
+def _cost_model_source() -> str:
+    from solver import cost
+
+    source = cost.load_model().source
+    return "this machine's calibration" if source != str(cost.SHIPPED) else "shipped cost model; mpm calibrate measures this machine"
 
 
 # -- mpm preview -------------------------------------------------------------
@@ -392,6 +424,28 @@ def cmd_import(args: argparse.Namespace) -> int:
     return EXIT_PARTIAL if translation.untranslated else EXIT_OK
 
 
+# -- mpm calibrate -----------------------------------------------------------
+
+
+def register_calibrate(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "calibrate", help="measure this machine's speed for the run-time estimates",
+        description="Time small blocks of every kind of step (a few minutes) and store the cost model "
+                    "that `mpm validate` and the service's estimates use (solver/cost.py).",
+    )
+    parser.add_argument("-o", "--output", metavar="JSON",
+                        help="where to store it (default: cost_model.json in the user's cache folder, mpm-solver/)")
+    parser.set_defaults(func=cmd_calibrate)
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    from solver.calibrate import calibrate, save
+
+    model = calibrate(log=lambda line: print(line, flush=True))
+    print(f"stored in {save(model, Path(args.output) if args.output else None)}")
+    return EXIT_OK
+
+
 # -- the command -------------------------------------------------------------
 
 BUILTINS = {
@@ -401,6 +455,7 @@ BUILTINS = {
     "animate": register_animate,
     "examples": register_examples,
     "import": register_import,
+    "calibrate": register_calibrate,
 }
 
 

@@ -348,6 +348,12 @@ class Expression:
         (result,) = stack
         return np.array(np.broadcast_to(result, shape), dtype=np.float64)
 
+    @property
+    def operations(self) -> int:
+        """Instructions of the program (constants, variables, operations): what one evaluation
+        costs per value, for the run-time estimate (solver/cost.py)."""
+        return len(self._program)
+
     def __repr__(self) -> str:
         return f"Expression({self.text!r})"
 

@@ -47,28 +47,13 @@ import numpy as np
 from numba import njit
 
 from solver import shape
-from solver.thermal_schema import conducts
+# which scenes the fused kernels run: decided without numba (the run-time estimates read it too)
+from solver.fused_scope import FUSED_SHAPES, supports  # noqa: F401
 from solver.threads import add_copies
 
-FUSED_SHAPES = frozenset({"linear", "quadratic_bspline"})   # the 1D weights `_axis` writes out
 _TOUCH = 1e-9   # as solver/shape/quadratic_bspline.py: round-off allowance at h/2 from a grid end
 
 USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docstring
-
-
-def supports(scene) -> bool:
-    """Whether the scene's step is one the fused kernels implement: ULMPM, USL or MUSL,
-    linear or quadratic B-spline weights, 2D or 3D, no axisymmetry, rigid body, heat
-    conduction or per-body contact fields, and for APIC and MLS a shape function whose D_p
-    is a constant times h^2 (its declared `apic_d`)."""
-    method = scene.method
-    return (method.formulation == "ulmpm" and method.scheme in ("usl", "musl")
-            and method.shape_function in FUSED_SHAPES and not scene.axisymmetric
-            and scene.dimension in (2, 3)
-            and not any(m.model == "rigid" for m in scene.materials.values())
-            and not conducts(scene)   # conduction reads the stored stencil (solver/thermal.py)
-            and not scene.contact.fields   # the per-body fields need the stored stencil (solver/contact.py)
-            and (method.transfer not in ("apic", "mls") or shape.REGISTRY[method.shape_function].apic_d is not None))
 
 
 @functools.cache

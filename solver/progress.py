@@ -28,6 +28,55 @@ def format_duration(seconds: float | None) -> str:
     return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
 
 
+class RateMeter:
+    """Recent rates of a run, smoothed: steps and simulated time per wall-clock second.
+
+    The first update only sets the origin: what came before it (loading the kernels,
+    compiling a new variant, placing the particles) says nothing about the steps to
+    come, and a rate or an ETA taken over it was absurd ("ETA 4:22:43" for a 21 s
+    run). Each later interval's rates enter an exponential average over TIME_CONSTANT
+    seconds of wall time, so the ETA follows an adaptive step that shrinks or grows.
+    The rate is known after one measured interval, the ETA after MIN_SECONDS of them.
+    """
+
+    TIME_CONSTANT = 5.0
+    MIN_SECONDS = 1.0
+
+    def __init__(self) -> None:
+        self._last: tuple[float, int, float] | None = None
+        self._steps: float | None = None      # steps per second
+        self._sim_time: float | None = None   # simulated time per second
+        self._measured = 0.0
+
+    def update(self, now: float, step: int, sim_time: float) -> None:
+        if self._last is None:
+            self._last = (now, step, sim_time)
+            return
+        then, last_step, last_time = self._last
+        elapsed = now - then
+        if elapsed <= 0 or step <= last_step:
+            return
+        steps, simulated = (step - last_step) / elapsed, (sim_time - last_time) / elapsed
+        if self._steps is None:
+            self._steps, self._sim_time = steps, simulated
+        else:
+            weight = 1.0 - math.exp(-elapsed / self.TIME_CONSTANT)
+            self._steps += weight * (steps - self._steps)
+            self._sim_time += weight * (simulated - self._sim_time)
+        self._measured += elapsed
+        self._last = (now, step, sim_time)
+
+    @property
+    def steps_per_second(self) -> float | None:
+        return self._steps
+
+    def eta_seconds(self, remaining_sim_time: float) -> float | None:
+        """Wall time to simulate `remaining_sim_time` more at the recent rate; None until known."""
+        if self._sim_time is None or self._sim_time <= 0 or self._measured < self.MIN_SECONDS:
+            return None
+        return max(remaining_sim_time, 0.0) / self._sim_time
+
+
 class ProgressBar:
     """Draws progress updates (objects or dicts with the ProgressInfo fields).
 
@@ -73,14 +122,15 @@ class ProgressBar:
             return info.get(name) if isinstance(info, dict) else getattr(info, name, None)
 
         fraction = min(max(float(get("fraction") or 0.0), 0.0), 1.0)
-        rate = get("steps_per_second")
+        rate, eta = get("steps_per_second"), get("eta_seconds")
         parts = [
             f"{100 * fraction:5.1f}%",
             f"step {get('step') or 0}",
             f"t {float(get('time') or 0.0):.4g}/{float(get('end_time') or 0.0):.4g}",
-            f"{rate:.0f} steps/s" if rate else "- steps/s",
-            f"ETA {format_duration(get('eta_seconds'))}",
         ]
+        # the rate and the ETA are None until a recent rate is measured (RateMeter): left out until then
+        parts += [f"{rate:.0f} steps/s"] if rate else []
+        parts += [f"ETA {format_duration(eta)}"] if eta is not None else []
         text = "  ".join(parts)
         if not self.tty:
             return text

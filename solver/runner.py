@@ -17,9 +17,10 @@ from pathlib import Path
 from typing import Callable
 
 from solver import __version__
-from solver import checkpoint
+from solver import checkpoint, energy, series
 from solver.fields import frame_fields
 from solver.preview import finish_outputs
+from solver.progress import RateMeter
 from solver.scene import Scene, load_scene
 from solver.stepper import ExplicitMPM, Instability
 
@@ -124,6 +125,8 @@ def run(
     restart = checkpoint.resume(loop.sim, out_dir) if resume else None
     if restart is not None:
         loop.dt, loop.frames.next = restart.dt, restart.frame_next
+        if len(restart.series.get("total_energy", ())):   # the balance is against t = 0
+            loop.initial_energy = float(restart.series["total_energy"][0])
     domain = loop.sim.domain
     writer = domain.writer(out_dir, scene, __version__)   # a ResultWriter on rank 0
     with writer, _StopSignals() as signals:
@@ -156,6 +159,7 @@ class _TimeLoop:
         self.energy_floor = ENERGY_FLOOR * sim.energy_scale()
         self.initial_energy = sim.energies().total
         self.last_report = self.started
+        self.rates = RateMeter()
         self.last_energies = {}
         self.dt = scene.time.dt or sim.stable_time_step(scene.time.cfl)
 
@@ -187,15 +191,12 @@ class _TimeLoop:
         sim = self.sim
         sim.check_finite()
         e = sim.energies()
-        self.last_energies = {"kinetic": e.kinetic, "strain": e.strain, "total": e.total}
+        self.last_energies = {"kinetic": e.kinetic, "strain": e.strain, "total": e.total,
+                              "balance": e.balance, "error": e.balance - self.initial_energy}
         if finished or sim.step_count % self.series_every == 0:
-            writer.append_series(time=sim.time, dt=self.dt, kinetic_energy=e.kinetic,
-                                 strain_energy=e.strain, total_energy=e.total,
-                                 external_work=e.external_work, boundary_work=e.boundary_work,
-                                 **({"damping_work": e.damping_work} if sim.scene.damping else {}),
-                                 **({"friction_work": e.friction_work} if sim.frictional else {}),
-                                 **sim.reactions(), **sim.thermal_series())
-        supplied = self.initial_energy + max(e.external_work, 0.0) + max(e.boundary_work, 0.0) + e.thermal
+            writer.append_series(time=sim.time, dt=self.dt, **energy.series_row(e, self.initial_energy),
+                                 **sim.reactions(), **series.row(sim), **sim.thermal_series())
+        supplied = self.initial_energy + e.supplied_work + sim.expansion_energy_bound()
         if not e.total <= ENERGY_GROWTH_LIMIT * supplied + self.energy_floor:
             raise Instability(sim.step_count, sim.time, None, "total energy",
                               f"{e.total:.6g} exceeds {ENERGY_GROWTH_LIMIT:g} x the energy supplied "
@@ -222,7 +223,8 @@ class _TimeLoop:
 
     def report(self, now: float) -> None:
         if self.progress is not None and self.sim.domain.is_root:
-            self.progress(_progress(self.sim, self.end, self.dt, self.started, now, self.last_energies))
+            self.rates.update(now, self.sim.step_count, self.sim.time)
+            self.progress(_progress(self.sim, self.end, self.dt, self.rates, self.last_energies))
 
 
 def make_simulation(scene: Scene) -> ExplicitMPM:
@@ -241,12 +243,8 @@ def _series_stride(scene, sim: ExplicitMPM) -> int:
     return max(1, math.ceil(scene.time.end / dt / MAX_SERIES_POINTS))
 
 
-def _progress(sim: ExplicitMPM, end: float, dt: float, started: float, now: float, energies: dict) -> ProgressInfo:
-    elapsed = now - started
+def _progress(sim: ExplicitMPM, end: float, dt: float, rates: RateMeter, energies: dict) -> ProgressInfo:
     fraction = min(1.0, sim.time / end) if end > 0 else 1.0
-    rate = sim.step_count / elapsed if elapsed > 0 and sim.step_count else None
-    eta = None
-    if fraction > 0 and elapsed > 0:
-        eta = elapsed * (1.0 - fraction) / fraction
+    eta = 0.0 if fraction >= 1.0 else rates.eta_seconds(end - sim.time)
     return ProgressInfo(step=sim.step_count, time=sim.time, end_time=end, fraction=fraction,
-                        steps_per_second=rate, eta_seconds=eta, dt=dt, energies=dict(energies))
+                        steps_per_second=rates.steps_per_second, eta_seconds=eta, dt=dt, energies=dict(energies))

@@ -47,6 +47,7 @@ from solver.boundary import face_material
 from solver.errors import SolverError
 from solver.expressions import ExpressionError, compile_expression
 from solver.materials.ideal_gas import IdealGas
+from solver.materials.johnson_cook import JohnsonCook
 from solver.materials.rigid import Rigid
 from solver.parallel.slabs import scene_problems as slab_problems
 from solver.units import Units
@@ -605,6 +606,8 @@ class Time(SceneModel):
     dt: Positive | None = None  # None: adaptive, dt = cfl * h / max(c + |v|)
     cfl: Annotated[float, Strict(), Field(gt=0, le=1)] = 0.5
     max_steps: Annotated[int, Strict(), Field(ge=1)] = 10_000_000
+    # a fixed dt above the stability limit (solver/stability.py) is refused unless this is true
+    allow_unstable_dt: Boolean = False
 
     def fixed_steps(self) -> int | None:
         """Steps of a fixed-dt run: end/dt rounded up, ignoring round-off below a
@@ -661,6 +664,22 @@ class Output(SceneModel):
     energies: Energies = True  # or N: every N steps
     preview: Preview = Field(default_factory=Preview)
     checkpoint: Checkpoint | None = None  # unset: the runner's interval (every minute by default)
+    # time series beside the energies, written with them (solver/series.py): momentum, center_of_mass, reactions
+    series: list[str] = Field(default_factory=list)
+
+    @field_validator("series")
+    @classmethod
+    def _series_known(cls, names: list[str]) -> list[str]:
+        from solver.series import SERIES   # numpy only; it reads no scene model
+        problems = []
+        for i, name in enumerate(names):
+            if name not in SERIES:
+                problems.append((f"[{i}]", f"unknown series {name!r}; known series: {', '.join(SERIES)}"))
+            elif name in names[:i]:
+                problems.append((f"[{i}]", f"{name!r} is listed twice"))
+        if problems:
+            raise problems_at(problems)
+        return names
 
     @field_validator("fields")
     @classmethod
@@ -853,6 +872,9 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     problems += _contact_problems(scene, names)
     if grid_ok:
         problems += slab_problems(scene)
+    if not problems:   # the limit reads the materials, bodies and grid: only once they are sound
+        from solver.stability import time_step_problems   # (it reads this module's constants)
+        problems += time_step_problems(scene)
     return problems
 
 
@@ -1015,6 +1037,11 @@ def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> 
         for name in ("initial_density", "initial_pressure"):
             if getattr(body, name) is not None:
                 problems.append((f"{path}.{name}", "only used with an 'ideal_gas' material"))
+    if (isinstance(material, JohnsonCook) and material.m is None and body.initial_temperature is not None
+            and body.initial_temperature != material.room_temperature):
+        problems.append((f"materials.{body.material}.m", f"required: {path} starts at initial_temperature = "
+                                                         f"{fmt(body.initial_temperature)}, not room_temperature, "
+                                                         "so the thermal softening exponent is used"))
     if isinstance(material, Rigid) and body.initial_velocity is not None:
         problems.append((f"{path}.initial_velocity", "a 'rigid' body moves with its prescribed velocity; "
                                                      "use velocity instead"))

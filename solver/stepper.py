@@ -9,12 +9,12 @@ plugged in at named hook points.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from solver import kernels, parallel, shape, step, thermal, threads
+from solver import energy, kernels, parallel, shape, step, thermal, threads
 from solver.axisymmetric import Axisymmetry
+from solver.boundary import ConditionReactions
+from solver.energy import Energies
 from solver.errors import SolverError
 from solver.loads import AppliedLoads, BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
@@ -39,21 +39,6 @@ class Instability(SolverError, RuntimeError):
 
     def __reduce__(self):   # sent between processes: any rank's failure stops them all
         return Instability, (self.step, self.time, self.particle_id, self.quantity, self.detail)
-
-
-@dataclass
-class Energies:
-    kinetic: float
-    strain: float
-    external_work: float
-    boundary_work: float
-    damping_work: float = 0.0   # work of the damping forces (<= 0), solver/damping.py
-    thermal: float = 0.0        # the most mechanical energy thermal expansion can have given (solver/thermal.py)
-    friction_work: float = 0.0  # work of contact and wall friction on the sliding (<= 0), solver/contact.py
-
-    @property
-    def total(self) -> float:
-        return self.kinetic + self.strain
 
 
 class ExplicitMPM:
@@ -96,6 +81,8 @@ class ExplicitMPM:
         self.domain.distribute(self.particles)
         self.axisymmetry = Axisymmetry(scene, self.particles) if scene.axisymmetric else None
         self.rigid = RigidBodies(scene, self.particles, self.domain)
+        # the boundary conditions' reactions, kept across placements of the grid (the `reactions` series)
+        self.condition_reactions = ConditionReactions(scene) if "reactions" in scene.output.series else None
         self.place()
         masses = self.particles.mass[self.particles.mass > 0]   # rigid particles carry none
         self.mass_cutoff = MASS_CUTOFF_FRACTION * float(self.domain.min(masses.min() if masses.size else np.inf))
@@ -185,20 +172,16 @@ class ExplicitMPM:
         since the last call, by series name."""
         return {**self.rigid.reactions(), **self.hooks.series()}
 
-    @property
-    def frictional(self) -> bool:
-        """Whether friction can act (contact with a field per body, or a frictional wall): the
-        energy series then has friction_work."""
-        return self.scene.contact.fields or any(getattr(bc, "mode", None) == "friction"
-                                                for bc in self.scene.boundary_conditions)
-
     def energies(self) -> Energies:
-        p = self.particles
-        strain = sum(material.strain_energy(p, sl) for material, sl in self.materials)
-        local = [kernels.kinetic_energy(p.mass, p.v), float(strain), self.external_work, self.boundary_work,
-                 self.damping_work, self.expansion.energy_bound(self) if self.expansion is not None else 0.0,
-                 self.friction_work]
-        return Energies(*(float(e) for e in self.domain.sum(local)))
+        """The energy balance's terms now (solver/energy.py), summed over the processes."""
+        return energy.measure(self)
+
+    def expansion_energy_bound(self) -> float:
+        """The most mechanical energy thermal expansion can have given so far (solver/thermal.py),
+        summed over the processes: the growth check counts it as supplied."""
+        if self.expansion is None:
+            return 0.0
+        return float(self.domain.sum([self.expansion.energy_bound(self)])[0])
 
     def thermal_series(self) -> dict[str, float]:
         """thermal_energy (sum m c T) and the heat that came in through heat_flux and

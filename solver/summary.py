@@ -3,7 +3,8 @@
 Particles are counted chunk by chunk (solver.seeding); everything else is
 arithmetic on the scene. The step count of an adaptive run, the memory and the
 run time are estimates: the time step follows the waves and velocities as they
-evolve, and the throughput depends on the machine.
+evolve, and the run time comes from a cost model measured on this machine
+(solver/cost.py).
 """
 
 from __future__ import annotations
@@ -13,18 +14,10 @@ import math
 import numpy as np
 from pydantic import BaseModel, Field
 
+from solver import cost, stability
 from solver import shape as shape_functions
-from solver.expressions import compile_expression
-from solver.scene import SPACE_VARIABLES, TIME_VARIABLES, Body, Scene
+from solver.scene import Scene
 from solver.seeding import count_particles
-from solver.thermal_schema import conduction_time_step
-
-# Assumed solver throughput in particle-steps per second (one process): a rough
-# figure for the order of magnitude of the run time, not a measurement.
-THROUGHPUT = {1: 1e7, 2: 1e7, 3: 3e6}
-
-_SAMPLES_PER_AXIS = 9  # points per axis of a body's box where initial velocities are sampled
-_TIME_SAMPLES = 101  # instants in [0, end] where prescribed velocities are sampled
 
 
 class Summary(BaseModel):
@@ -35,7 +28,10 @@ class Summary(BaseModel):
     dt: float = Field(description="the fixed time step, or an estimate of the adaptive one at t = 0")
     estimated_steps: int = Field(description="end / dt; an estimate when dt is adaptive")
     memory_bytes: int = Field(description="estimate of the solver's particle and grid arrays")
-    estimated_run_seconds: float = Field(description="rough estimate from an assumed throughput")
+    estimated_run_seconds: float = Field(description="wall time from start to exit, from this machine's measured "
+                                                     "cost model (solver/cost.py; mpm calibrate)")
+    warnings: list[dict[str, str]] = Field(default_factory=list,
+                                           description="[{path, message}]: valid, but probably not what is meant")
 
 
 def summarize(scene: Scene) -> Summary:
@@ -53,8 +49,37 @@ def summarize(scene: Scene) -> Summary:
         dt=dt,
         estimated_steps=steps,
         memory_bytes=memory_bytes(scene, particles, nodes),
-        estimated_run_seconds=particles * steps / THROUGHPUT[scene.dimension],
+        estimated_run_seconds=cost.estimate_seconds(scene, per_body, nodes, steps),
+        warnings=[{"path": path, "message": message} for path, message in scene_warnings(scene)],
     )
+
+
+# Elastic solids, whose free vibrations the PIC share of the FLIP blend damps.
+_VIBRATING = {"linear_elastic", "neo_hookean"}
+# Energy a free vibration loses per period at flip_ratio 0.99 (benchmarks/flip_damping.py, docs/scene.md).
+FLIP_099_LOSS = {"bar": "1.2 %", "beam": "7.6 %"}
+
+
+def scene_warnings(scene: Scene) -> list[tuple[str, str]]:
+    """(path, message) of what is valid but probably not meant: today a FLIP blend below 1 on an
+    elastic body that runs for at least one period of its slowest axial wave, with no damping
+    asked for (then the blend's damping is a surprise)."""
+    method = scene.method
+    if method.transfer != "flip" or method.flip_ratio >= 1.0 or scene.damping is not None:
+        return []
+    for body in scene.bodies:
+        material = scene.materials[body.material]
+        speed = material.initial_wave_speed(body)
+        if material.model not in _VIBRATING or speed <= 0:
+            continue
+        lower, upper = body.geometry.shape().bounding_box()
+        if scene.time.end >= 4 * float(max(np.subtract(upper, lower))) / speed:
+            return [("method.flip_ratio",
+                     f"{method.flip_ratio:g} blends {100 * (1 - method.flip_ratio):.3g} % PIC into every step, which "
+                     f"damps vibrations: at 0.99 a coarse cantilever lost {FLIP_099_LOSS['beam']} of its energy a "
+                     f"period, a bar {FLIP_099_LOSS['bar']} (docs/scene.md, method); 1.0 keeps them, and "
+                     f"`damping` says that damping is meant")]
+    return []
 
 
 def time_step(scene: Scene) -> float:
@@ -63,10 +88,8 @@ def time_step(scene: Scene) -> float:
     conducts (solver/thermal_schema.py). Where nothing moves, carries waves or conducts, end."""
     if scene.time.dt is not None:
         return scene.time.dt
-    fastest = max(_wave_speed(scene, body) + _largest_speed(scene, body) for body in scene.bodies)
-    dt = scene.time.end if fastest <= 0 else scene.time.cfl * min(scene.cell_sizes()) / fastest
-    conduction = conduction_time_step(scene)
-    return dt if conduction is None else min(dt, scene.time.cfl * conduction[0])
+    limit = stability.stable_limit(scene)   # the waves' and, where heat conducts, the conduction's
+    return scene.time.end if limit is None else scene.time.cfl * limit.dt
 
 
 def estimate_steps(scene: Scene) -> int:
@@ -87,32 +110,3 @@ def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
     per_particle = 8 * (2 * dim + 2 * dim * dim + 9 + 4 + 1 + touched * (1 + dim) + touched) + 4
     per_node = 8 * (1 + 3 * dim) + (8 * (1 + dim) if scene.contact.fields else 0)
     return particles * per_particle + nodes * per_node * scene.grid_fields()
-
-
-def _wave_speed(scene: Scene, body: Body) -> float:
-    return scene.materials[body.material].initial_wave_speed(body)
-
-
-def _largest_speed(scene: Scene, body: Body) -> float:
-    """Largest initial (or prescribed) speed, sampled on a lattice over the body's
-    box (or over [0, end] for a prescribed velocity)."""
-    if body.velocity is not None:
-        values = {"t": np.linspace(0.0, scene.time.end, _TIME_SAMPLES)}
-        return _largest_norm(body.velocity, TIME_VARIABLES, values)
-    if body.initial_velocity is None:
-        return 0.0
-    lower, upper = body.geometry.shape().bounding_box()
-    lattice = np.meshgrid(*(np.linspace(lo, up, _SAMPLES_PER_AXIS) for lo, up in zip(lower, upper)), indexing="ij")
-    values = {name: axis.ravel() for name, axis in zip(SPACE_VARIABLES, lattice)}
-    return _largest_norm(body.initial_velocity, SPACE_VARIABLES, values)
-
-
-def _largest_norm(components: list[float | str], variables: tuple[str, ...], values: dict) -> float:
-    squares = 0.0
-    for component in components:
-        if component is None:   # a free axis of a rigid body
-            continue
-        value = compile_expression(component, variables).evaluate(**values) if isinstance(component, str) else component
-        squares = squares + np.square(value)
-    largest = float(np.max(np.sqrt(squares)))
-    return largest if math.isfinite(largest) else 0.0

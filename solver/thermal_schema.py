@@ -42,17 +42,6 @@ def conduction_time_step(scene) -> tuple[float, str] | None:
     return best
 
 
-def thermal_time_step_problems(scene) -> list[tuple[str, str]]:
-    """A fixed time.dt above the conduction limit is refused (the adaptive step keeps below it)."""
-    if scene.time.dt is None:
-        return []
-    limit = conduction_time_step(scene)
-    if limit is None or scene.time.dt <= limit[0] * (1 + 1e-12):
-        return []
-    return [("time.dt", f"{fmt(scene.time.dt)} is above the conduction limit rho c h^2 / (2 d k) = "
-                        f"{limit[0]:.6g} of material {limit[1]!r}")]
-
-
 def thermal_problems(scene, condition_classes, length_ok) -> list[tuple[str, str]]:
     """The thermal keys of the materials and the thermal boundary conditions."""
     problems: list[tuple[str, str]] = []
@@ -83,4 +72,4 @@ def thermal_problems(scene, condition_classes, length_ok) -> list[tuple[str, str
         if where is not None:
             length_ok(f"{path}.where.lower", where.lower)
             length_ok(f"{path}.where.upper", where.upper)
-    return problems + thermal_time_step_problems(scene)
+    return problems   # (a fixed dt above the conduction limit: solver/stability.py)

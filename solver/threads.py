@@ -17,7 +17,8 @@ copies of a grid of this size, on this machine (docs/benchmarks.md).
 
 The count comes from the scene's `parallel.threads`; 0 (the default) means the
 cores this run may use, shared among its processes, and no more threads than
-the particles keep busy (PARTICLES_PER_THREAD).
+the particles keep busy (PARTICLES_PER_THREAD; solver/thread_count.py decides the count
+without numba, for the run-time estimates too).
 """
 from __future__ import annotations
 
@@ -37,22 +38,7 @@ import numba  # noqa: E402  (after the policy: OpenMP reads it when numba first 
 import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
-
-# Automatic thread counts give each thread at least this many particles: below it the
-# start of a parallel loop and the sum of the grid copies outweigh the work (a
-# 224-particle job ran at 40 steps/s on two threads beside another job).
-PARTICLES_PER_THREAD = 4000
-
-
-def available_cores() -> int:
-    """The cores this run may use: MPM_CORES when set (a worker running several jobs at
-    once gives each its share), else the cores this process may run on."""
-    if os.environ.get("MPM_CORES", "").isdigit() and int(os.environ["MPM_CORES"]) > 0:
-        return int(os.environ["MPM_CORES"])
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:   # not on Linux
-        return os.cpu_count() or 1
+from solver.thread_count import PARTICLES_PER_THREAD, available_cores, requested_threads  # noqa: E402,F401
 
 
 def configure(scene, particles: int) -> int:
@@ -62,10 +48,7 @@ def configure(scene, particles: int) -> int:
     set, is taken as it is; 0 takes the cores shared among the processes, at most one
     thread per PARTICLES_PER_THREAD particles. numba's pool is sized at start-up
     (NUMBA_NUM_THREADS, by default the cores it sees): a request beyond it is capped there."""
-    processes = scene.parallel.processes
-    by_size = max(1, particles // (processes * PARTICLES_PER_THREAD))
-    requested = scene.parallel.threads or min(max(1, available_cores() // processes), by_size)
-    threads = max(1, min(requested, numba.config.NUMBA_NUM_THREADS))
+    threads = max(1, min(requested_threads(scene, particles), numba.config.NUMBA_NUM_THREADS))
     numba.set_num_threads(threads)
     return threads
 

@@ -11,6 +11,9 @@
     ["kinetic_energy", "kinetic", "var(--kinetic)"],
     ["strain_energy", "strain", "var(--strain)"],
     ["total_energy", "total", "var(--total)"],
+    // stored energy minus the work done on the bodies (gravity, loads, walls, damping, ...):
+    // constant when energy is conserved; its drift from the start is the balance error
+    ["energy_balance", "balance", "var(--balance)"],
   ];
 
   // ---------------------------------------------------------------- DOM helpers
@@ -345,11 +348,21 @@
     return ticks;
   }
 
-  /** Line plot of the energies against time. */
+  /** Line plot of the energies against time, and the energy balance's error as a number. */
   function energyPlot(series) {
     const present = ENERGY_SERIES.filter(([key]) => Array.isArray(series[key]) && series[key].length);
-    return linePlot(present.map(([key, label, colour]) => ({ label, colour, x: series.time || [], y: series[key] })),
-                    "energy", "No energy data yet.");
+    const plot = linePlot(present.map(([key, label, colour]) => ({ label, colour, x: series.time || [], y: series[key] })),
+                          "energy", "No energy data yet.");
+    const error = series.energy_error;
+    if (!Array.isArray(error) || !error.length || !plot.classList.contains("energy")) return plot;
+    const last = error[error.length - 1];
+    const largest = Math.max(...error.filter(Number.isFinite).map(Math.abs));
+    const scale = Math.max(...["total_energy", "external_work", "boundary_work"].flatMap((key) =>
+      (series[key] || []).filter(Number.isFinite).map(Math.abs)), 0);
+    const share = scale > 0 ? ` (${fmtNumber(100 * last / scale, 3)} % of the largest energy)` : "";
+    plot.append(h("p", { class: "balance-error" }, `Energy balance error now: ${fmtNumber(last)}${share}; `
+      + `largest: ${fmtNumber(largest)}`));
+    return plot;
   }
 
   /** Lines ({label, colour, x, y}) on shared axes, y against time; thins each to ~1500 points. */
@@ -776,7 +789,8 @@
       const energies = record.energies || {};
       energyNow.replaceChildren(...ENERGY_SERIES.map(([, label, colour]) => h("div", {},
         h("dt", {}, h("i", { class: "swatch", style: `background: ${colour}` }), `${label} now`),
-        h("dd", {}, fmtNumber(energies[label])))));
+        h("dd", {}, fmtNumber(energies[label])))),
+        h("div", {}, h("dt", {}, "balance error now"), h("dd", {}, fmtNumber(energies.error))));
       errorBox.hidden = !record.error;
       errorBox.replaceChildren(h("strong", {}, "Diagnostic"), h("pre", {}, record.error || ""));
       cancel.disabled = !ACTIVE.has(record.status);

@@ -7,10 +7,10 @@ import math
 from typing import Annotated, Literal, Union
 
 import numpy as np
-from pydantic import Field, Strict, ValidationInfo, field_validator
+from pydantic import Field, Strict, ValidationInfo, field_validator, model_validator
 
 from solver.materials.registry import MaterialType, StateVariable
-from solver.schema import ElasticMaterial, NonNegative, Positive, Real, SceneModel, fmt, scene_error
+from solver.schema import ElasticMaterial, NonNegative, Positive, Real, SceneModel, fmt, problems_at, scene_error
 
 
 class LinearEOS(SceneModel):
@@ -48,10 +48,12 @@ class JohnsonCook(ElasticMaterial):
     n: NonNegative
     C: NonNegative
     reference_strain_rate: Positive
-    m: Positive
+    # thermal softening exponent: only used where a temperature can leave room_temperature
+    # (heating, or a body's initial_temperature); scene._johnson_cook_problems asks for it there
+    m: Positive | None = None
     room_temperature: NonNegative
     melt_temperature: Positive
-    specific_heat: Positive
+    specific_heat: Positive | None = None   # only used with heating (taylor_quinney > 0)
     taylor_quinney: Annotated[float, Strict(), Field(ge=0, le=1)]
     eos: Annotated[Union[LinearEOS, MieGruneisenEOS], Field(discriminator="model")] = LinearEOS(model="linear")
     damage: JohnsonCookDamage | None = None
@@ -61,6 +63,20 @@ class JohnsonCook(ElasticMaterial):
         """sqrt((K + 4/3 G) / rho) with the EOS bulk modulus (rho0 c0^2 for Mie-Gruneisen)."""
         bulk = self.density * self.eos.c0**2 if self.eos.model == "mie_gruneisen" else self.bulk_modulus
         return math.sqrt((bulk + 4 * self.shear_modulus / 3) / self.density)
+
+    @property
+    def heats(self) -> bool:
+        return self.taylor_quinney > 0
+
+    @model_validator(mode="after")
+    def _thermal_keys_with_heating(self) -> "JohnsonCook":
+        if not self.heats:
+            return self
+        heating = f"required with heating (taylor_quinney = {fmt(self.taylor_quinney)} > 0; 0 makes it isothermal)"
+        missing = [(key, heating) for key in ("m", "specific_heat") if getattr(self, key) is None]
+        if missing:
+            raise problems_at(missing)
+        return self
 
     @field_validator("melt_temperature")
     @classmethod

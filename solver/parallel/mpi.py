@@ -324,6 +324,7 @@ class _OwnedConstraints:
         self._whole, self._keep = whole, keep
         self.axis = np.ascontiguousarray(whole.axis[keep])
         self.value = np.ascontiguousarray(whole.value[keep])
+        self.condition = whole.condition[keep]
         self.time_dependent = whole.time_dependent
         friction_node, kept = owned_local(whole.friction_node)
         self.friction_node = friction_node

@@ -75,10 +75,12 @@ class Hooks:
 class GridConditions:
     """The scene's boundary conditions (walls, velocity conditions, the axis r = 0) as a hook,
     on every velocity field of the grid. Frictional walls act as contact does (solver/contact.py):
-    on v~_I^{t+dt} and MUSL's remapped velocity, not on v_I^t; the prescribed components win."""
+    on v~_I^{t+dt} and MUSL's remapped velocity, not on v_I^t; the prescribed components win.
+    With `reactions` (solver/boundary.py, the `reactions` series) their impulses are counted."""
 
-    def __init__(self, sim):
+    def __init__(self, sim, reactions=None):
         self.sim, self.constraints, self.grid = sim, sim.constraints, sim.grid
+        self.reactions = reactions
         self._dissipated = np.zeros(1)
 
     def begin_step(self, sim, t_end: float) -> None:
@@ -86,7 +88,10 @@ class GridConditions:
 
     def constrain(self, grid_mass, v, record: bool) -> float:
         c, g = self.constraints, self.grid
+        counted = record and self.reactions is not None
         if g.fields == 1 and not c.friction_node.size:   # the common scene: as cheap as it was
+            if counted:
+                self.reactions.record(c, grid_mass, v)
             return kernels.apply_dirichlet(c.node, c.axis, c.value, grid_mass, v)
         work = 0.0
         walls = c.friction_node.size > 0 and v is not g.v_old
@@ -95,10 +100,16 @@ class GridConditions:
             if walls:
                 contact.friction_wall(c.friction_node, c.friction_axis, c.friction_sign, c.friction_mu, v_f, mass_f,
                                       self._dissipated)
+            if counted:
+                self.reactions.record(c, mass_f, v_f)
             work += kernels.apply_dirichlet(c.node, c.axis, c.value, mass_f, v_f)
         if record:
             self.sim.friction_work += float(self._dissipated[0])
         return work
+
+    def end_step(self, sim, dt: float) -> None:
+        if self.reactions is not None:
+            self.reactions.elapsed += dt
 
 
 class RigidMotion:
@@ -128,7 +139,7 @@ def _field_contact(sim):
 
 
 def _grid_conditions(sim):
-    return GridConditions(sim)
+    return GridConditions(sim, sim.condition_reactions)
 
 
 def _hoop_terms(sim):

@@ -65,11 +65,12 @@ def test_submit_through_the_form_and_watch_it_succeed(page: Page, example, scree
     assert badge.text_content() == "succeeded", page.locator(".diagnostic").text_content()
     expect(page.locator(".job-head .progress-label")).to_have_text("100.0%")
 
-    # the energy plot: kinetic, strain and total, each a line of many points
+    # the energy plot: kinetic, strain, total and the balance, each a line of many points, and the balance error
     lines = page.locator("svg.energy-plot polyline.series")
-    expect(lines).to_have_count(3)
-    for i in range(3):
+    expect(lines).to_have_count(4)
+    for i in range(4):
         assert len(lines.nth(i).get_attribute("points").split()) > 100
+    expect(page.locator("p.balance-error")).to_contain_text("Energy balance error now:")
 
     # frames and fields of the finished job: the slider, its label and the image agree
     slider = page.get_by_label("frame")

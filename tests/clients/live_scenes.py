@@ -34,6 +34,7 @@ def unstable(example: dict[str, Any], name: str = "sdk-unstable") -> dict[str, A
     scene = quick(example, name)
     scene["time"]["dt"] = 0.2
     scene["time"]["end"] = 100.0
+    scene["time"]["allow_unstable_dt"] = True   # validation refuses it otherwise (solver/stability.py)
     return scene
 
 

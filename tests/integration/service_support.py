@@ -228,4 +228,6 @@ def long_running(name: str = "long") -> dict[str, Any]:
 
 def unstable(name: str = "unstable") -> dict[str, Any]:
     """A time step fifty times too large: the disks blow up and leave the grid."""
-    return two_disks(name, end=5.0, dt=0.05)
+    scene = two_disks(name, end=5.0, dt=0.05)
+    scene["time"]["allow_unstable_dt"] = True   # validation refuses it otherwise (solver/stability.py)
+    return scene

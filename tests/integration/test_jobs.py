@@ -63,7 +63,9 @@ def test_a_job_runs_to_success_with_progress_results_and_previews(api, stack):
     for record in running:
         assert 0 < record["progress"] <= 1
         assert record["sim_time"] == pytest.approx(record["progress"] * 20.0, rel=0.05)
-        assert record["steps_per_second"] > 0 and record["eta_seconds"] >= 0
+        # the rate and the ETA are null until a recent rate is measured (solver/progress.py RateMeter)
+        assert record["steps_per_second"] is None or record["steps_per_second"] > 0
+        assert record["eta_seconds"] is None or record["eta_seconds"] >= 0
         assert record["energies"]["kinetic"] > 0
     steps = [r["step"] for r in running]
     assert steps == sorted(steps)

@@ -116,6 +116,7 @@ def test_the_generated_kernels_are_rewritten_only_when_the_template_changes(tmp_
 def test_a_particle_leaving_the_grid_is_named_by_the_fused_step():
     scene = copy.deepcopy(SCENE_2D)
     scene["bodies"][0]["initial_velocity"] = [-2000.0, 0.0]
+    scene["time"] = {**scene["time"], "allow_unstable_dt": True}   # meant: the particles fly off the grid
     sim = ExplicitMPM(load_scene(scene))
     assert sim.fused
     with pytest.raises(Exception, match="position of particle"):

@@ -123,7 +123,7 @@ def test_body_force_expression_equals_the_same_gravity(tmp_path):
 def test_too_large_a_time_step_is_stopped_with_a_diagnostic(tmp_path):
     # dt forty times the stable step: the run must stop, name the step and the quantity, keep frames
     dt = 40 * 0.1 / C_DIL
-    scene = block(velocity=["0.5 * x", "-0.5 * y"], time={"end": 200 * dt, "dt": dt},
+    scene = block(velocity=["0.5 * x", "-0.5 * y"], time={"end": 200 * dt, "dt": dt, "allow_unstable_dt": True},
                   output={"frames": 100, "fields": ["position", "velocity"]})
     result = run(scene, tmp_path)
     assert result.status == "partial" and result.reason == "unstable"

@@ -355,6 +355,7 @@ class TestLimits:
         monkeypatch.setattr(seeding, "_inside_chunks", lambda *a, **k: pytest.fail("candidates were visited"))
         scene = copy.deepcopy(two_disks())
         scene["grid"]["cell_size"] = cell_size
+        scene["time"]["allow_unstable_dt"] = True   # dt = 0.001 is far above these cells' limit; not the point here
         with pytest.raises(SceneError) as caught:
             load_scene(scene, Limits(max_particles=2_000_000, max_grid_nodes=4_000_000))
         assert {e["path"] for e in caught.value.errors} == {"grid", "bodies"}

@@ -5,7 +5,7 @@ import tracemalloc
 
 import pytest
 
-from solver import capabilities
+from solver import capabilities, cost
 from solver.scene import load_scene
 from solver.summary import summarize
 
@@ -41,7 +41,9 @@ def test_two_disk_memory_and_run_time():
     # F 4, L 4, stress 9, mass, volume, volume0, density, id 5, weights 4, gradients 8,
     # node indices 4 = 42; plus the 4-byte body index. Per node: mass 1 + momenta 4 + force 2.
     assert summary.memory_bytes == 416 * (42 * 8 + 4) + 441 * 7 * 8
-    assert summary.estimated_run_seconds == pytest.approx(416 * 3500 / 1e7, rel=1e-12)
+    # the run time is the cost model's (tests/unit/test_cost.py), with the scene's counts
+    expected = cost.estimate_seconds(load_scene(two_disks()), [208, 208], 441, 3500)
+    assert summary.estimated_run_seconds == pytest.approx(expected, rel=1e-12)
 
 
 def test_contact_fields_multiply_the_grid_memory():
@@ -63,11 +65,23 @@ def test_adaptive_step_estimate():
 
 def test_expression_velocities_are_sampled_over_the_body():
     scene = two_disks(dt=None)
-    # |v| peaks at the disk's far corner of its box: x = y = 0.2 gives v = (2, 2)
+    # a box body: |v| peaks at its far corner, x = y = 0.5, where v = (5, 5)
+    scene["bodies"][1]["geometry"] = {"type": "box", "lower": [0.1, 0.1], "upper": [0.5, 0.5]}
     scene["bodies"][1]["initial_velocity"] = ["10*x", "10*y"]
     summary = summarize(load_scene(scene))
     c = math.sqrt((7500 / 13 + 2 * 5000 / 13) / 1000)
     assert summary.dt == pytest.approx(0.5 * 0.05 / (c + 5 * math.sqrt(2)), rel=1e-12)
+
+
+def test_velocities_outside_the_body_do_not_count():
+    scene = two_disks(dt=None)
+    # the disk of radius 0.2 at (0.3, 0.3): |v| = 10 r is at most 10 (0.3 sqrt(2) + 0.2) on it, and
+    # 10 * 0.5 sqrt(2) at its box's corner, where there is no particle; at least its centre's 10 * 0.3 sqrt(2)
+    scene["bodies"][1]["initial_velocity"] = ["10*x", "10*y"]
+    summary = summarize(load_scene(scene))
+    c = math.sqrt((7500 / 13 + 2 * 5000 / 13) / 1000)
+    fastest = 0.5 * 0.05 / summary.dt - c
+    assert 10 * 0.3 * math.sqrt(2) <= fastest <= 10 * (0.3 * math.sqrt(2) + 0.2)
 
 
 def test_gas_wave_speed_comes_from_the_body(monkeypatch):
@@ -91,7 +105,7 @@ def test_shape_function_support_enters_the_memory(monkeypatch):
     assert summary.memory_bytes == 416 * (90 * 8 + 4) + 441 * 7 * 8
 
 
-def test_3d_throughput():
+def test_3d_run_time_is_the_cost_models():
     scene = {
         "dimension": 3,
         "grid": {"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.25},
@@ -102,7 +116,8 @@ def test_3d_throughput():
     }
     summary = summarize(load_scene(scene))
     assert summary.particles == 2 * 2 * 4 and summary.grid_nodes == 125
-    assert summary.estimated_run_seconds == pytest.approx(16 * 100 / 3e6, rel=1e-12)
+    expected = cost.estimate_seconds(load_scene(scene), [16], 125, 100)
+    assert summary.estimated_run_seconds == pytest.approx(expected, rel=1e-12)
 
 
 def test_no_allocation_proportional_to_the_scene():
@@ -113,7 +128,7 @@ def test_no_allocation_proportional_to_the_scene():
         "materials": {"rubber": RUBBER},
         "bodies": [{"name": "block", "material": "rubber",
                     "geometry": {"type": "box", "lower": [0, 0, 0], "upper": [1, 1, 1]}}],
-        "time": {"end": 1.0, "dt": 0.01},
+        "time": {"end": 1.0, "dt": 0.005},
     }
     scene = load_scene(scene)
     tracemalloc.start()
@@ -124,3 +139,15 @@ def test_no_allocation_proportional_to_the_scene():
         tracemalloc.stop()
     assert summary.particles == 8_000_000
     assert peak < 50e6
+
+
+def test_a_flip_blend_below_one_on_a_long_elastic_run_is_warned_about():
+    # two disks, c = 1.16, longest side 0.4: one axial period 4 * 0.4 / 1.16 = 1.4 < end = 3.5
+    warnings = summarize(load_scene(two_disks())).warnings
+    assert [w["path"] for w in warnings] == ["method.flip_ratio"] and "7.6 %" in warnings[0]["message"]
+    for change in ({"method": {"transfer": "flip", "flip_ratio": 1.0}}, {"method": {"transfer": "pic"}},
+                   {"damping": {"type": "viscous", "coefficient": 0.1}}):
+        assert summarize(load_scene({**two_disks(), **change})).warnings == []
+    short = two_disks()
+    short["time"]["end"] = 1.0   # less than one period: nothing to damp yet
+    assert summarize(load_scene(short)).warnings == []

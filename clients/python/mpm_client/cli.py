@@ -161,6 +161,10 @@ def _status(args: argparse.Namespace) -> int:
         ("progress", format_progress(record)), ("step", str(record.step)),
         ("created", str(record.created_at or "")), ("finished", str(record.finished_at or "")),
     ]
+    energies = record.energies
+    if energies.total is not None and energies.error is not None:
+        lines.append(("energy", f"total {energies.total:.6g}, balance error {energies.error:.3g} "
+                                f"(stored energy - work done on the bodies, against t = 0)"))
     if record.error:
         lines.append(("error", record.error))
     for key, value in lines:

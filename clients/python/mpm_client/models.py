@@ -33,6 +33,8 @@ class Energies(_Open):
     kinetic: float | None = None
     strain: float | None = None
     total: float | None = None
+    balance: float | None = None   # stored energy minus the work done on the bodies: constant if conserved
+    error: float | None = None     # balance now minus balance at t = 0
 
 
 class JobRecord(_Open):

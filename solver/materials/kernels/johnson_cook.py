@@ -191,9 +191,12 @@ class JohnsonCook(IsotropicElastic):
     def __init__(self, config, dimension: int):
         super().__init__(config, dimension)
         self.config = config
-        self.flow = np.array([config.A, config.B, config.n, config.C, config.reference_strain_rate, config.m,
+        # m and specific_heat may be absent where unused (no heating, every temperature the room's):
+        # then T* = 0, 1 - T*^m = 1 for any m > 0, and dT = 0, e = 0 for any specific heat
+        self.flow = np.array([config.A, config.B, config.n, config.C, config.reference_strain_rate,
+                              1.0 if config.m is None else config.m,
                               config.room_temperature, config.melt_temperature, config.taylor_quinney,
-                              config.specific_heat, config.density])
+                              1.0 if config.specific_heat is None else config.specific_heat, config.density])
         self.eos = eos.parameters(config)
         self.bulk = eos.reference_bulk(self.eos)
         self.damage = damage_model.parameters(config.damage)

@@ -1,0 +1,182 @@
+"""Run-time estimates from a measured cost model.
+
+A run costs its start-up (the interpreter, loading the compiled kernels, seeding,
+the result file and the preview), its frames and its steps; a step costs
+
+    t_step = a_d + b_d N + sum over materials (c_k f_k + m_model) P_model / S(T)
+
+with N grid nodes, P_model particles of each material, a_d and b_d the fixed and
+per-node cost of a step in d dimensions, c_k the per-particle cost of the step's
+kind k = (dimension, backend, formulation, shape function) with a linear elastic
+material, FLIP and MUSL, f_k the product of the factors of the scene's transfer,
+scheme and axisymmetry, m_model what the material's stress update adds over linear
+elasticity, and S(T) the speed-up of T threads (Amdahl's law with the parallel share
+measured at the calibration's thread count).
+
+The figures come from `mpm calibrate` (solver/calibrate.py), stored in the user's
+cache folder (`calibration_path()`); without that, the model shipped with the
+package (`SHIPPED`, measured on the development machine) is used. `source` says which.
+A kernel variant not yet in numba's cache compiles on its first run (seconds to a
+minute): the estimate assumes a warm cache, as every run after the first has.
+"""
+from __future__ import annotations
+
+import functools
+import os
+from pathlib import Path
+
+from pydantic import BaseModel, Field
+
+from solver import fused_scope
+from solver.expressions import compile_expression
+from solver import shape as shape_functions
+from solver.scene import BODY_FORCE_VARIABLES
+from solver.thread_count import pool_size, requested_threads
+
+SHIPPED = Path(__file__).with_name("cost_model.json")
+VERSION = 1
+
+
+def calibration_path() -> Path:
+    """Where `mpm calibrate` stores this machine's model: the user's cache folder."""
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return cache / "mpm-solver" / "cost_model.json"
+
+
+class ThreadScaling(BaseModel):
+    threads: int = Field(description="the thread count the speed-up was measured at")
+    speedup: float = Field(description="time with one thread / time with `threads`")
+
+    def at(self, threads: int) -> float:
+        """Speed-up at `threads` by Amdahl's law, its parallel share p from the measurement. A
+        measured speed-up below 1 (threads that waited for each other on a busy machine) is
+        taken as it is, for any thread count above 1."""
+        if threads <= 1 or self.threads <= 1:
+            return 1.0
+        if self.speedup < 1.0:
+            return self.speedup
+        measured = min(self.speedup, float(self.threads))
+        p = (1.0 - 1.0 / measured) / (1.0 - 1.0 / self.threads)
+        return 1.0 / ((1.0 - p) + p / threads)
+
+
+class CostModel(BaseModel):
+    version: int = VERSION
+    machine: str = Field("", description="where it was measured (host name, cores)")
+    measured_at: str = ""
+    startup_seconds: float = Field(description="a run of a tiny scene, from the command to its exit")
+    startup_extra_seconds: dict[str, float] = Field(
+        default_factory=dict, description="'<dim>/<backend>/<shape>': what a run of that kind adds to the start-up "
+                                          "(kernels that compile in every process)")
+    frame_particle_seconds: float = Field(description="per particle and output frame")
+    step_seconds: dict[str, float] = Field(description="'<dim>/<backend>': fixed cost of a step")
+    node_seconds: dict[str, float] = Field(description="'<dim>/<backend>': per grid node and step")
+    particle_seconds: dict[str, float] = Field(
+        description="'<dim>/<backend>/<formulation>/<shape>': per particle and step, linear elastic, flip, musl")
+    material_seconds: dict[str, float] = Field(description="'<dim>/<model>': added per particle and step")
+    expression_seconds: float = Field(0.0, description="per particle, step and instruction of the body_force "
+                                                       "expressions (evaluated at every particle every step)")
+    factors: dict[str, float] = Field(description="'<backend>/<transfer or scheme>', 'axisymmetric': "
+                                                  "multiply the per-particle cost")
+    thread_scaling: dict[str, ThreadScaling] = Field(description="'<dim>/<backend>'")
+    source: str = Field("", exclude=True, description="the file it was read from")
+
+
+@functools.cache
+def _read(path: str, mtime: float) -> CostModel | None:
+    try:
+        model = CostModel.model_validate_json(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return model if model.version == VERSION else None
+
+
+def load_model() -> CostModel:
+    """This machine's calibration when there is a valid one, else the shipped model."""
+    for path in (calibration_path(), SHIPPED):
+        try:
+            model = _read(str(path), path.stat().st_mtime)
+        except OSError:
+            continue
+        if model is not None:
+            return model.model_copy(update={"source": str(path)})
+    raise FileNotFoundError(f"no cost model: {SHIPPED} is missing from the package")
+
+
+def planned_threads(scene, particles: int) -> int:
+    """The threads per process a run of the scene will take (solver/threads.configure)."""
+    return max(1, min(requested_threads(scene, particles), pool_size()))
+
+
+def backend_name(scene) -> str:
+    """'fused' or 'general': the step's backend (solver/step: the fused one where it applies)."""
+    return "fused" if fused_scope.supports(scene) else "general"
+
+
+def _lookup(table: dict[str, float], key: str, fallbacks: list[str]) -> tuple[float, str]:
+    for candidate in [key, *fallbacks]:
+        if candidate in table:
+            return table[candidate], candidate
+    raise KeyError(key)
+
+
+def _kind_seconds(model: CostModel, dim: int, backend: str, formulation: str, name: str) -> float:
+    """c_k: measured, else the same shape function in the other formulation times the ratio of
+    the two formulations' linear figures, else the linear figure times the nodes a particle
+    touches over linear's."""
+    table = model.particle_seconds
+    key = f"{dim}/{backend}/{formulation}/{name}"
+    if key in table:
+        return table[key]
+    mine = table.get(f"{dim}/{backend}/{formulation}/linear")
+    for other in ("ulmpm", "tlmpm"):
+        theirs, shape_key = table.get(f"{dim}/{backend}/{other}/linear"), f"{dim}/{backend}/{other}/{name}"
+        if shape_key in table and mine and theirs:
+            return table[shape_key] * mine / theirs
+    linear, _ = _lookup(table, f"{dim}/{backend}/{formulation}/linear", [f"{dim}/general/ulmpm/linear"])
+    return linear * (shape_functions.REGISTRY[name].support / 2) ** dim
+
+
+def particle_step_seconds(model: CostModel, scene, backend: str) -> float:
+    """c_k f_k: one particle's step with a linear elastic material, before threads."""
+    method = scene.method
+    base = _kind_seconds(model, scene.dimension, backend, method.formulation, method.shape_function)
+    factor = model.factors.get(f"{backend}/{method.transfer}", 1.0) * model.factors.get(
+        f"{backend}/{method.scheme}", 1.0)
+    if scene.axisymmetric:
+        factor *= model.factors.get("axisymmetric", 1.0)
+    return base * factor
+
+
+def _expression_seconds(model: CostModel, scene) -> float:
+    """Per particle and step: the body_force expressions, evaluated with numpy in the step."""
+    operations = sum(compile_expression(c, BODY_FORCE_VARIABLES).operations
+                     for c in scene.body_force or () if isinstance(c, str))
+    return model.expression_seconds * operations
+
+
+def estimate_seconds(scene, particles_per_body: list[int], nodes: int, steps: int,
+                     model: CostModel | None = None) -> float:
+    """Wall time of a run from start to exit, with numba's cache warm."""
+    model = model or load_model()
+    dim = scene.dimension
+    backend = backend_name(scene)
+    particles = sum(particles_per_body)
+    per_particle = particle_step_seconds(model, scene, backend)
+    material_time = 0.0
+    for body, count in zip(scene.bodies, particles_per_body):
+        name = scene.materials[body.material].model
+        added = model.material_seconds.get(f"{dim}/{name}", model.material_seconds.get(f"2/{name}", 0.0))
+        material_time += count * added
+    threads = planned_threads(scene, particles) * scene.parallel.processes
+    scaling = model.thread_scaling.get(f"{dim}/{backend}")
+    speedup = scaling.at(threads) if scaling is not None else 1.0
+    fixed, _ = _lookup(model.step_seconds, f"{dim}/{backend}", [f"{dim}/general", "2/general"])
+    per_node, _ = _lookup(model.node_seconds, f"{dim}/{backend}", [f"{dim}/general", "2/general"])
+    step = fixed + (per_node * nodes + (per_particle + _expression_seconds(model, scene)) * particles
+                    + material_time) / speedup
+    frames = model.frame_particle_seconds * particles * scene.output.frames
+    startup = model.startup_seconds + model.startup_extra_seconds.get(
+        f"{dim}/{backend}/{scene.method.shape_function}", 0.0)
+    return startup + frames + steps * step
+

@@ -1,0 +1,123 @@
+"""The energy balance of a run, as a sum over registered terms.
+
+Each term is an energy the bodies hold now (STORED: kinetic, strain; later thermal)
+or a work done on them since t = 0 (WORK: the loads and gravity, the boundary
+conditions and rigid bodies, damping; later friction). Energy is conserved when
+
+    balance = sum(stored) - sum(work) = the stored energy at t = 0
+
+and `energy_error` = balance - initial is what the discretisation (and any process
+no term counts yet, such as plastic dissipation) made or lost. A physics that stores
+or exchanges energy registers its term here once (`register`): the series, the
+growth check and every display of the balance then include it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+STORED, WORK = "stored", "work"
+
+
+def _always(scene: Any) -> bool:
+    return True
+
+
+@dataclass(frozen=True)
+class Term:
+    name: str                                   # its time-series column
+    kind: str                                   # STORED or WORK
+    local: Callable[[Any], float]               # this process's share, from the simulation
+    present: Callable[[Any], bool] = _always    # whether a scene has it (a column of its series)
+
+
+def _kinetic(sim) -> float:
+    from solver import kernels
+    return kernels.kinetic_energy(sim.particles.mass, sim.particles.v)
+
+
+def _strain(sim) -> float:
+    return sum(material.strain_energy(sim.particles, sl) for material, sl in sim.materials)
+
+
+TERMS: list[Term] = [
+    Term("kinetic_energy", STORED, _kinetic),
+    Term("strain_energy", STORED, _strain),
+    Term("external_work", WORK, lambda sim: sim.external_work),     # gravity, body forces, loads
+    Term("boundary_work", WORK, lambda sim: sim.boundary_work),     # walls, velocity conditions, rigid bodies
+    Term("damping_work", WORK, lambda sim: sim.damping_work, lambda scene: scene.damping is not None),
+    Term("friction_work", WORK, lambda sim: sim.friction_work, lambda scene: frictional(scene)),   # solver/contact.py
+]
+
+
+def frictional(scene) -> bool:
+    """Whether friction can act: contact with a field per body, or a frictional wall."""
+    return scene.contact.fields or any(getattr(bc, "mode", None) == "friction" for bc in scene.boundary_conditions)
+
+
+def register(term: Term) -> None:
+    """Add a term (or replace the one of the same name)."""
+    TERMS[:] = [t for t in TERMS if t.name != term.name] + [term]
+
+
+def terms(scene) -> list[Term]:
+    return [t for t in TERMS if t.present(scene)]
+
+
+@dataclass
+class Energies:
+    """The terms' values (summed over processes), by series name."""
+
+    values: dict[str, float]
+    kinds: dict[str, str]
+
+    def _sum(self, kind: str) -> float:
+        return sum(v for name, v in self.values.items() if self.kinds[name] == kind)
+
+    @property
+    def total(self) -> float:
+        """What the bodies hold now: the stored terms."""
+        return self._sum(STORED)
+
+    @property
+    def work(self) -> float:
+        """The work done on the bodies since t = 0."""
+        return self._sum(WORK)
+
+    @property
+    def balance(self) -> float:
+        return self.total - self.work
+
+    @property
+    def supplied_work(self) -> float:
+        """The work terms that put energy in (their positive parts)."""
+        return sum(max(v, 0.0) for name, v in self.values.items() if self.kinds[name] == WORK)
+
+    @property
+    def kinetic(self) -> float:
+        return self.values["kinetic_energy"]
+
+    @property
+    def strain(self) -> float:
+        return self.values["strain_energy"]
+
+    def __getattr__(self, name: str) -> float:   # e.external_work, e.damping_work, ...
+        values = self.__dict__.get("values", {})
+        if name in values:
+            return values[name]
+        if name.endswith("_work") or name.endswith("_energy"):
+            return 0.0   # a term this scene does not have
+        raise AttributeError(name)
+
+
+def measure(sim) -> Energies:
+    """Every term of the simulation's scene, summed over the processes."""
+    chosen = terms(sim.scene)
+    totals = sim.domain.sum([float(t.local(sim)) for t in chosen])
+    return Energies({t.name: float(v) for t, v in zip(chosen, totals)}, {t.name: t.kind for t in chosen})
+
+
+def series_row(energies: Energies, initial: float) -> dict[str, float]:
+    """The series columns of one row: every term, the stored total, the balance and its error."""
+    return {**energies.values, "total_energy": energies.total, "energy_balance": energies.balance,
+            "energy_error": energies.balance - initial}

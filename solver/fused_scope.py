@@ -1,0 +1,23 @@
+"""Which scenes the fused kernels (solver/fused.py) step, decided without loading numba:
+the service's run-time estimates (solver/cost.py) ask it too."""
+from __future__ import annotations
+
+from solver import shape
+from solver.thermal_schema import conducts
+
+FUSED_SHAPES = frozenset({"linear", "quadratic_bspline"})   # the 1D weights `_axis` writes out
+
+
+def supports(scene) -> bool:
+    """Whether the scene's step is one the fused kernels implement: ULMPM, USL or MUSL,
+    linear or quadratic B-spline weights, 2D or 3D, no axisymmetry, rigid body, heat
+    conduction or per-body contact fields, and for APIC and MLS a shape function whose D_p
+    is a constant times h^2 (its declared `apic_d`)."""
+    method = scene.method
+    return (method.formulation == "ulmpm" and method.scheme in ("usl", "musl")
+            and method.shape_function in FUSED_SHAPES and not scene.axisymmetric
+            and scene.dimension in (2, 3)
+            and not any(m.model == "rigid" for m in scene.materials.values())
+            and not conducts(scene)   # conduction reads the stored stencil (solver/thermal.py)
+            and not scene.contact.fields   # the per-body fields need the stored stencil (solver/contact.py)
+            and (method.transfer not in ("apic", "mls") or shape.REGISTRY[method.shape_function].apic_d is not None))
