@@ -2,6 +2,7 @@
 
     python benchmarks/scaling.py            # the tables of docs/benchmarks.md
     python benchmarks/scaling.py --quick    # smaller problems, fewer steps
+    python benchmarks/scaling.py --strong-only --repeats 3   # part 1 only, three times
 
 1. Strong scaling: a 3D elastic block of about 200k particles, the same steps on
    1 and on 2 processes (mpiexec of the MPI wheel, as `mpm run -n K` starts them),
@@ -182,11 +183,16 @@ def main() -> None:
         return
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="smaller problems, fewer steps")
+    parser.add_argument("--strong-only", action="store_true", help="part 1 only")
+    parser.add_argument("--repeats", type=int, default=1, help="part 1 this many times")
     args = parser.parse_args()
     # 3D strong scaling: 23 cells across 0.3 -> 77 x 23 x 23 cells, about 208k particles
     cells, steps = (12, 5) if args.quick else (23, 20)
-    rows, one, two = strong_scaling(cells, steps)
-    print("\n".join(rows), "", sep="\n")
+    for _ in range(args.repeats):
+        rows, one, two = strong_scaling(cells, steps)
+        print("\n".join(rows), "", sep="\n", flush=True)
+    if args.strong_only:
+        return
     print("\n".join(weak_projection(one, two)), "", sep="\n")
     print("\n".join(memory_rows(60 if args.quick else 150, 12 if args.quick else 23)), "", sep="\n")
     # 35 cells across 0.3, 1.2 long: 140 x 35 x 35 cells, about 1.05 M particles

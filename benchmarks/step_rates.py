@@ -3,6 +3,7 @@
     python benchmarks/step_rates.py                      # this tree: us per step of each example
     python benchmarks/step_rates.py --base 13114c6       # and the same on that commit, alternately
     python benchmarks/step_rates.py --base HEAD~3 --examples two_disks taylor_bar_3d --repeats 5
+    python benchmarks/step_rates.py --base main --blocks --examples   # the blocks of throughput.py only
 
 Each measurement is its own process (a warm numba cache; the compile is not timed):
 the example's scene at one thread (or --threads), 10 steps to warm up, then the best
@@ -36,7 +37,7 @@ except ImportError:
     from solver.tlmpm import TotalLagrangianMPM
     def make_simulation(s):
         return (TotalLagrangianMPM if s.method.formulation == "tlmpm" else ExplicitMPM)(s)
-scene = json.load(open(f"examples/{sys.argv[1]}.json"))
+scene = json.load(open(sys.argv[1] if sys.argv[1].endswith(".json") else f"examples/{sys.argv[1]}.json"))
 scene["parallel"] = {**scene.get("parallel", {}), "threads": int(sys.argv[2])}
 loaded = load_scene(scene)
 sim = make_simulation(loaded)
@@ -61,8 +62,24 @@ def measure(tree: Path, example: str, threads: int, steps: int) -> float:
 
 
 def steps_for(example: str) -> int:
-    """Fewer steps for the large 3D examples, so each measurement takes seconds."""
-    return 10 if example in ("hypervelocity_lead", "taylor_bar_3d", "taylor_bar_3d_tlmpm") else 50
+    """Fewer steps for the large 3D examples and the blocks, so each measurement takes seconds."""
+    return 10 if example in ("hypervelocity_lead", "taylor_bar_3d", "taylor_bar_3d_tlmpm") or example.endswith(".json") \
+        else 50
+
+
+def write_blocks(folder: Path) -> list[str]:
+    """The scenes of benchmarks/throughput.py as JSON files (measured by path in every tree):
+    its part-2 block (linear elastic, linear hats, MUSL, FLIP) and its side-by-side block
+    (neo-Hookean, quadratic B-splines, USL, APIC), 2D 225^2 cells and 3D 32^3 cells."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from throughput import block_scene, mls_block_scene
+    paths = []
+    for dim, cells in ((2, 225), (3, 32)):
+        for name, scene in (("flip", block_scene(dim, cells)), ("apic", mls_block_scene(dim, cells, 1))):
+            path = folder / f"block_{name}_{dim}d.json"
+            path.write_text(json.dumps(scene))
+            paths.append(str(path))
+    return paths
 
 
 def compare(trees: dict[str, Path], examples: list[str], threads: int, repeats: int) -> list[dict]:
@@ -84,13 +101,15 @@ def compare(trees: dict[str, Path], examples: list[str], threads: int, repeats: 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--base", help="a commit to measure side by side with this tree")
-    parser.add_argument("--examples", nargs="+", default=sorted(p.stem for p in (ROOT / "examples").glob("*.json")))
+    parser.add_argument("--examples", nargs="*", default=sorted(p.stem for p in (ROOT / "examples").glob("*.json")))
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", type=Path, help="also write the rows as JSON")
+    parser.add_argument("--blocks", action="store_true", help="also the block scenes of benchmarks/throughput.py")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch:
         trees = {"this": ROOT}
+        blocks = write_blocks(Path(scratch)) if args.blocks else []
         if args.base:
             base = Path(scratch) / "base"
             subprocess.run(["git", "worktree", "add", "--detach", str(base), args.base], cwd=ROOT, check=True,
@@ -101,7 +120,7 @@ def main() -> int:
         if skipped:
             print(f"not in both trees, skipped: {', '.join(skipped)}", flush=True)
         try:
-            rows = compare(trees, common, args.threads, args.repeats)
+            rows = compare(trees, blocks + common, args.threads, args.repeats)
         finally:
             if args.base:
                 subprocess.run(["git", "worktree", "remove", "--force", str(trees["base"])], cwd=ROOT, check=False)
@@ -110,7 +129,7 @@ def main() -> int:
     for r in rows:
         base = f"{r['base_us']:.1f} | {r['ratio']:.3f}" if "base_us" in r else "- | -"
         spread = f"{r['this_spread']:.0%}" + (f", {r['base_spread']:.0%}" if "base_spread" in r else "")
-        print(f"| {r['example']} | {r['this_us']:.1f} | {base} | {spread} |")
+        print(f"| {Path(r['example']).stem} | {r['this_us']:.1f} | {base} | {spread} |")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))
     return 0

@@ -23,27 +23,41 @@ import numpy as np
 from numba import njit, prange
 
 
+@njit(cache=True, inline="always")
+def _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, dim):
+    """Stress of particle p; returns its squared sound speed."""
+    ratio = volume0[p] / volume[p]                  # rho / rho0 = 1 / J
+    stiff = ratio**gamma
+    pressure = max(K * (stiff - 1.0), min_pressure)
+    tr = 0.0
+    for a in range(dim):
+        tr += L[p, a, a]
+    for a in range(3):
+        for b in range(3):
+            d = 0.5 * (L[p, a, b] + L[p, b, a]) if a < dim and b < dim else 0.0
+            if a == b:
+                d -= tr / 3.0
+                stress[p, a, b] = 2.0 * mu * d - pressure
+            else:
+                stress[p, a, b] = 2.0 * mu * d
+    return K * gamma * stiff / (ratio * rho0)
+
+
 @njit(parallel=True, cache=True)
 def _update(L, volume, volume0, stress, rho0, K, gamma, mu, min_pressure):
-    """Stress of every particle; returns the largest sound speed."""
+    """Stress of every particle; returns the largest sound speed. One loop per dimension,
+    `dim` a compile-time constant in each (as solver/materials/kernels/linear_elastic.py)."""
     n, dim = L.shape[0], L.shape[1]
-    c2_max = 0.0
-    for p in prange(n):
-        ratio = volume0[p] / volume[p]                  # rho / rho0 = 1 / J
-        stiff = ratio**gamma
-        pressure = max(K * (stiff - 1.0), min_pressure)
-        c2_max = max(c2_max, K * gamma * stiff / (ratio * rho0))   # (a max reduction over threads)
-        tr = 0.0
-        for a in range(dim):
-            tr += L[p, a, a]
-        for a in range(3):
-            for b in range(3):
-                d = 0.5 * (L[p, a, b] + L[p, b, a]) if a < dim and b < dim else 0.0
-                if a == b:
-                    d -= tr / 3.0
-                    stress[p, a, b] = 2.0 * mu * d - pressure
-                else:
-                    stress[p, a, b] = 2.0 * mu * d
+    c2_max = 0.0   # (a max reduction over threads)
+    if dim == 2:
+        for p in prange(n):
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 2))
+    elif dim == 3:
+        for p in prange(n):
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 3))
+    else:
+        for p in prange(n):
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 1))
     return math.sqrt(c2_max)
 
 

@@ -15,21 +15,35 @@ from solver.kernels import determinant
 from solver.materials.kernels.elastic import IsotropicElastic
 
 
+@njit(cache=True, inline="always")
+def _update_one(F, stress, p, lam, mu, dim):
+    J = determinant(F[p])
+    c = lam * math.log(J) / J
+    for a in range(3):
+        for b in range(3):
+            bab = 0.0   # (F F^T)_ab of the padded F
+            if a < dim and b < dim:
+                for k in range(dim):
+                    bab += F[p, a, k] * F[p, b, k]
+            elif a == b:
+                bab = 1.0
+            stress[p, a, b] = mu / J * (bab - (1.0 if a == b else 0.0)) + (c if a == b else 0.0)
+
+
 @njit(parallel=True, cache=True)
 def _update(F, stress, lam, mu):
+    # One loop per dimension: `dim` a compile-time constant in each, as in linear_elastic.py
+    # (measured 1.5x faster in 3D, the same in 2D); the same operations in the same order.
     n, dim = F.shape[0], F.shape[1]
-    for p in prange(n):
-        J = determinant(F[p])
-        c = lam * math.log(J) / J
-        for a in range(3):
-            for b in range(3):
-                bab = 0.0   # (F F^T)_ab of the padded F
-                if a < dim and b < dim:
-                    for k in range(dim):
-                        bab += F[p, a, k] * F[p, b, k]
-                elif a == b:
-                    bab = 1.0
-                stress[p, a, b] = mu / J * (bab - (1.0 if a == b else 0.0)) + (c if a == b else 0.0)
+    if dim == 2:
+        for p in prange(n):
+            _update_one(F, stress, p, lam, mu, 2)
+    elif dim == 3:
+        for p in prange(n):
+            _update_one(F, stress, p, lam, mu, 3)
+    else:
+        for p in prange(n):
+            _update_one(F, stress, p, lam, mu, 1)
 
 
 @njit(cache=True)
