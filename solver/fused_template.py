@@ -37,12 +37,9 @@ atomic adds in `_scatter` and its own shell.
 """
 from __future__ import annotations
 
-import hashlib
-import importlib.util
-import os
-import sys
-import tempfile
 from pathlib import Path
+
+from solver import generated
 
 AXES = "xyz"
 LOOPS = "ijk"
@@ -341,47 +338,11 @@ def source(dim: int) -> str:
     return "\n".join([HEADER.format(dim=dim), *_p2g(dim), *_g2p(dim)]) + "\n"
 
 
-def _folders() -> list[Path]:
-    """Where a generated module may go: the user's cache, else the system's temporary folder."""
-    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    temporary = Path(tempfile.gettempdir()) / f"mpm-solver-{os.getuid() if hasattr(os, 'getuid') else 'user'}"
-    return [cache / "mpm-solver" / "fused", temporary / "fused"]
-
-
 def write(dim: int) -> Path:
-    """The generated file for `dim`, (re)written only when its text changed, so that its
-    modification time, and with it numba's cache of the kernels, lasts while the
-    template does. Written to a temporary file and renamed: processes starting together
-    each see a whole file."""
-    text = source(dim)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    for folder in _folders():
-        path = folder / f"fused_{dim}d_{digest}.py"
-        try:
-            if path.is_file() and path.read_text() == text:
-                return path
-            folder.mkdir(parents=True, exist_ok=True)
-            temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            temporary.write_text(text)
-            os.replace(temporary, path)
-            return path
-        except OSError:
-            continue
-    raise OSError(f"nowhere to write the fused kernels' source: tried {', '.join(map(str, _folders()))}")
+    """The generated file for `dim`, (re)written only when its text changed (solver/generated.py)."""
+    return generated.write("fused", f"fused_{dim}d", source(dim))
 
 
 def load(dim: int):
-    """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p).
-
-    It is registered in sys.modules before it runs: numba's cache records a parallel
-    kernel's module by name and imports it by that name when it loads the kernel
-    (a module not in sys.modules is recorded as '<dynamic>', and such cache entries
-    fail to load in a later process)."""
-    name = f"solver._generated.fused_{dim}d"
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, write(dim))
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+    """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
+    return generated.load("fused", f"fused_{dim}d", source(dim))

@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from solver import fused, fused_template, shape
+from solver import fused, fused_template, generated, shape
 from solver.scene import load_scene
 from solver.stepper import ExplicitMPM
 
@@ -103,7 +103,7 @@ def test_fused_apic_needs_a_constant_d_p_from_the_shape_function(monkeypatch):
 
 
 def test_the_generated_kernels_are_rewritten_only_when_the_template_changes(tmp_path, monkeypatch):
-    monkeypatch.setattr(fused_template, "_folders", lambda: [tmp_path])
+    monkeypatch.setattr(generated, "_folders", lambda kind: [tmp_path])
     path = fused_template.write(3)
     assert path.parent == tmp_path and path.read_text() == fused_template.source(3)
     stamp = path.stat().st_mtime_ns

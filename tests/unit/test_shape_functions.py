@@ -256,3 +256,24 @@ def test_the_declared_apic_constant_is_the_inertia_of_the_weights(name):
     inertia = np.einsum("pk,pka,pkb->pab", s.w, offsets, offsets)
     expected = shape.REGISTRY[name].apic_d * np.diag(grid.h**2)
     np.testing.assert_allclose(inertia, np.broadcast_to(expected, inertia.shape), atol=1e-12 * np.max(grid.h) ** 2)
+
+
+def test_a_tensor_shape_functions_weights_kernel_is_taken_from_numbas_cache_by_a_later_process():
+    """The weights kernel generated per shape function (solver/shape/kernels/weights_template.py)
+    is compiled once: a second process loads it from numba's cache instead of compiling it
+    again (passed as an argument, the 1D function made every process compile it anew)."""
+    import subprocess
+    import sys
+    probe = ("import numpy as np\n"
+             "from solver.shape.kernels import gimp, tensor\n"
+             "x = np.array([[0.35, 0.45]]); length = np.full((1, 2), 0.05)\n"
+             "idx = np.zeros((1, 9), np.int64); w = np.zeros((1, 9)); dw = np.zeros((1, 9, 2))\n"
+             "from solver.kernels import stencil_spec; spec = stencil_spec(2, 9)\n"
+             "gimp.weights(spec, x, length, np.zeros(2), np.full(2, 10.0), np.array([10, 10]),\n"
+             "             np.array([1, 11]), idx, w, dw, 1)\n"
+             "print(sum(tensor.kernels('gimp').weights.stats.cache_hits.values()))\n")
+    runs = [subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+            for _ in range(2)]
+    for run in runs:
+        assert run.returncode == 0, run.stderr
+    assert int(runs[1].stdout.split()[-1]) >= 1   # the second process found the first one's entry

@@ -42,8 +42,9 @@ def axis(s, a, p, cells, inv_h, data, w1, g1):
 
 
 # the 1D function and the declared support (solver/shape/bernstein.py), as the tensor kernel takes them
-AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("bernstein")
+NODES = tensor.nodes_of("bernstein")
 
 
 def weights(spec, x, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    return tensor.weights(AXIS, NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    kernel = tensor.kernels("bernstein").weights   # (generated once: tensor.py)
+    return kernel(NODES, spec, x, tensor.NO_DATA, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -103,10 +103,11 @@ def axis(s, a, p, cells, inv_h, length, w1, g1):
 
 
 # the 1D function and the declared support (solver/shape/gimp.py), as the tensor kernel takes them
-AXIS, NODES = tensor.Typed(axis), tensor.nodes_of("gimp")
+NODES = tensor.nodes_of("gimp")
 
 
 def weights(spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """The shape-function interface with one more argument: `length` (n, dim), the
     current box sides l_p (capped at h)."""
-    return tensor.weights(AXIS, NODES, spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks)
+    kernel = tensor.kernels("gimp").weights   # (generated once: tensor.py)
+    return kernel(NODES, spec, x, length, lower, inv_h, cells, strides, idx, w, dw, blocks)

@@ -8,20 +8,21 @@ of the position s along axis a in cells from the grid's lower end (cells: the
 axis's cell count, inv_h: 1/h, data: the function's per-particle data, e.g.
 GIMP's box sides, or an empty array). It fills w1[a, j] and g1[a, j] (the derivative,
 already divided by h) for the `support` nodes first + j, and must test s itself
-(catching NaN). `weights` below does the rest for every module: the particle
-loop on the threads' blocks and the tensor products. The stencil node k has the
+(catching NaN). The kernel made from weights_template.py for each module (`kernels`)
+does the rest: the particle loop on the threads' blocks and the tensor products (`scatter`). The stencil node k has the
 per-axis offsets j_a = (k // support**a) % support (axis 0 fastest, like the
 node order).
 """
 from __future__ import annotations
 
+import functools
 from importlib import import_module
+from pathlib import Path
 
-import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from solver.threads import block_bounds, first_of
+from solver import generated
 
 NO_DATA = np.zeros((0, 0))   # `data` of the functions that need none
 _SUPPORTS = {n: np.empty((0,) * n) for n in range(1, 6)}
@@ -34,48 +35,20 @@ def nodes_of(module: str) -> np.ndarray:
     return _SUPPORTS[support]
 
 
-class Typed:
-    """A numba function to pass to `weights` from Python, with its numba type made once:
-    numba makes the type of a function argument anew at every call (about 4 us, a
-    quarter of a small 1D step), but takes an object's `_numba_type_` as it is."""
-
-    def __init__(self, function):
-        self.function = function
-        self._numba_type_ = numba.typeof(function)
+_IMPORT_LINE = "from solver.shape.kernels.quadratic_bspline import axis"
+_TEMPLATE = Path(__file__).with_name("weights_template.py")
 
 
-@njit(parallel=True, cache=True)
-def weights(axis, nodes, spec, x, data, lower, inv_h, cells, strides, idx, w, dw, blocks):
-    """idx, w, dw of every particle (solver/shape/__init__.py); the first particle outside
-    the grid, or -1. numba compiles one specialisation per `axis` function. `nodes`: an
-    empty array whose rank is the support, a compile-time constant (a runtime support made
-    the divisions of the tensor product cost 2-5x)."""
-    dims = spec[0]
-    if nodes.ndim ** len(dims) != idx.shape[1]:
-        raise ValueError("the kernel's support does not match the stencil's (the declared support)")
-    bounds = block_bounds(x.shape[0], blocks)
-    bad = np.empty(blocks, dtype=np.int64)
-    for t in prange(blocks):
-        bad[t] = _block(axis, nodes, dims, bounds[t], bounds[t + 1], x, data, lower, inv_h, cells, strides,
-                        idx, w, dw)
-    return first_of(bad)
-
-
-@njit(cache=True)
-def _block(axis, nodes, dims, start, stop, x, data, lower, inv_h, cells, strides, idx, w, dw):
-    """The particles start..stop-1 (a parallel kernel's block, solver/kernels.py)."""
-    dim, support = len(dims), nodes.ndim
-    base = np.empty(dim, dtype=np.int64)
-    w1 = np.empty((dim, support))
-    g1 = np.empty((dim, support))
-    for p in range(start, stop):
-        for a in range(dim):
-            first = axis((x[p, a] - lower[a]) * inv_h[a], a, p, cells[a], inv_h[a], data, w1, g1)
-            if first < 0:
-                return p
-            base[a] = first
-        scatter(p, nodes, dims, base, w1, g1, strides, idx, w, dw)
-    return -1
+@functools.cache
+def kernels(module: str):
+    """The weights kernel of solver/shape/kernels/<module>.py, generated from
+    weights_template.py with that module's `axis` (see there why): `kernels(m).weights(
+    nodes, spec, x, data, lower, inv_h, cells, strides, idx, w, dw, blocks)`."""
+    text = _TEMPLATE.read_text()
+    if _IMPORT_LINE not in text:
+        raise RuntimeError(f"{_TEMPLATE} lost its import line {_IMPORT_LINE!r}")
+    text = text.replace(_IMPORT_LINE, f"from solver.shape.kernels.{module} import axis")
+    return generated.load("shape", f"weights_{module}", text)
 
 
 @njit(cache=True)
