@@ -36,10 +36,11 @@ CASES = {
     # CPDI's 4-node stencil and deformed domains across the slab boundaries
     "cpdi": scene(SCENE_2D, method__shape_function="cpdi_r4"),
     "cpdi-q4": scene(SCENE_2D, method__shape_function="cpdi_q4"),   # tracked corners migrate with particles
+    "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
-        ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2),
+        ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3)]
 
 
