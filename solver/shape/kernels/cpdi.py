@@ -264,9 +264,10 @@ def move_corners(corners, x, v_grid, lower, inv_h, cells, strides, offset, dt, b
     particle and domain stay one (moved apart, the particle's stencil and its domain drift)."""
     bounds = block_bounds(corners.shape[0], blocks)
     for t in prange(blocks):
+        first, frac, v = np.empty(2, dtype=np.int64), np.empty(2), np.empty(2)
         for p in range(bounds[t], bounds[t + 1]):
             for c in range(4):
-                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt)
+                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt, first, frac, v)
             _centroid(corners[p], x[p])
 
 
@@ -283,12 +284,12 @@ def _centroid(q, out):
 
 
 @njit(cache=True)
-def _move_corner(corner, v_grid, lower, inv_h, cells, strides, offset, dt):
-    """x_c += dt sum_I N_I(x_c) v_I over the 2^d nodes of the corner's cell (moved onto the grid)."""
+def _move_corner(corner, v_grid, lower, inv_h, cells, strides, offset, dt, first, frac, v):
+    """x_c += dt sum_I N_I(x_c) v_I over the 2^d nodes of the corner's cell (moved onto the
+    grid); first, frac, v: scratch arrays of length d (allocated once per block)."""
     dim = corner.shape[0]
-    first = np.empty(dim, dtype=np.int64)
-    frac = np.empty(dim)
-    v = np.zeros(dim)
+    for a in range(dim):
+        v[a] = 0.0
     for a in range(dim):
         s = min(max((corner[a] - lower[a]) * inv_h[a], 0.0), float(cells[a]))
         first[a] = min(int(s), cells[a] - 1)
@@ -340,14 +341,13 @@ KUHN = np.array([[0, 1 << i, (1 << i) | (1 << j), 7] for i, j in ((0, 1), (1, 2)
 
 
 @njit(cache=True)
-def tetrahedra_weights(q, tets, wf, gw, centroid):
+def tetrahedra_weights(q, tets, wf, gw, centroid, J, Jinv):
     """The corner weights of the hexahedron q (8, 3) as the union of its tetrahedra: the
     domain average of the hats' piecewise-linear interpolant on the tetrahedra,
     wf_c = sum_t V_t / (4 V) [c in t] and gw_c = sum_t V_t / V grad lambda_c^t
     ([R] 3.6, CPDI-Tet4, eqs. 3.40-3.41 per tetrahedron, volume-averaged); `centroid`
-    gets the domain's volume centroid. Returns V, or <= 0 where a tetrahedron folded."""
-    J = np.empty((3, 3))
-    Jinv = np.empty((3, 3))
+    gets the domain's volume centroid (J, Jinv: 3 x 3 scratch). Returns V, or <= 0 where a
+    tetrahedron folded."""
     for c in range(8):
         wf[c] = 0.0
         for a in range(3):
@@ -389,11 +389,12 @@ def _tetrahedra_block(nodes, start, stop, x, corners, lower, inv_h, cells, strid
     wf = np.empty(8)
     gw = np.empty((8, 3))
     centroid = np.empty(3)
+    J, Jinv = np.empty((3, 3)), np.empty((3, 3))
     for p in range(start, stop):
         if not _first_nodes(p, x, lower, inv_h, cells, base):
             return p
         q = corners[p]
-        if not tetrahedra_weights(q, KUHN, wf, gw, centroid) > 0.0:
+        if not tetrahedra_weights(q, KUHN, wf, gw, centroid, J, Jinv) > 0.0:
             return p
         if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
             return p
@@ -408,8 +409,11 @@ def move_corners_tetrahedra(corners, x, v_grid, lower, inv_h, cells, strides, of
         wf = np.empty(8)
         gw = np.empty((8, 3))
         centroid = np.empty(3)
+        first, frac, v = np.empty(3, dtype=np.int64), np.empty(3), np.empty(3)
+        J, Jinv = np.empty((3, 3)), np.empty((3, 3))
         for p in range(bounds[t], bounds[t + 1]):
             for c in range(8):
-                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt)
-            if tetrahedra_weights(corners[p], KUHN, wf, gw, centroid) > 0.0:   # folded: the next weights stop the run
+                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt, first, frac, v)
+            # a folded domain keeps its particle where it was: the next weights stop the run there
+            if tetrahedra_weights(corners[p], KUHN, wf, gw, centroid, J, Jinv) > 0.0:
                 x[p, :] = centroid
