@@ -85,7 +85,8 @@ def failure(x, particles, grid, index):
             f"spans {np.array2string(extent, precision=3)} cells per axis and reaches beyond the cells next to "
             "its own, which its stencil covers (larger domains leave holes in CPDI's weights, review 3.7): a "
             "domain is h / particles_per_cell stretched by F, so seed more particles per cell, or use a shape "
-            "function without domains ('gimp', 'cubic_bspline'); a cpdi_q4 domain may also have folded")
+            "function without domains ('gimp', 'cubic_bspline'); a tracked (cpdi_q4, cpdi_tet4) domain may "
+            "also have folded")
 
 
 def domain_corners(x, length, F) -> np.ndarray:
