@@ -276,6 +276,21 @@ def test_tet4_refuses_a_folded_domain():
     assert outside == 1
 
 
+
+def test_tet4_refuses_a_domain_beyond_its_stencil():
+    """E28 for CPDI-Tet4: a domain stretched to 5 cells along x (its corners beyond the
+    cells next to the particle's own) stops at that particle."""
+    from solver.shape.kernels.cpdi import domain_corners
+    grid = make_grid(3, cells=12)
+    x = grid.lower + 6.0 * grid.h + 0.1 * grid.h
+    x = np.repeat(x[None], 2, axis=0)
+    side = np.repeat(grid.h[None] / 2, 2, axis=0)
+    side[1, 0] = 5.0 * grid.h[0]
+    corners = domain_corners(x, side, np.broadcast_to(np.eye(3), (2, 3, 3)))
+    outside, _ = _evaluate_tracked(x, corners, grid)
+    assert outside == 1
+
+
 def _scene_3d(**method):
     scene = _scene(**method)
     scene.update(dimension=3, grid={"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.125},
