@@ -1,7 +1,7 @@
-"""CPDI-R4's and CPDI-Q4's cost per particle-step against linear hats and uGIMP on the same scene:
+"""CPDI-R4's, CPDI-Q4's and CPDI-Tet4's cost per particle-step against linear hats and uGIMP on the same scene:
 docs/benchmarks.md, section "F-bar and CPDI".
 
-    python benchmarks/cpdi.py [--rounds 5] [--steps 40] [--only-2d]
+    python benchmarks/cpdi.py [--rounds 5] [--steps 40] [--only-2d | --only-3d]
 
 Scenes: the E6 unit square (2D, h = 1/32, 2 x 2 particles per cell: 4096 particles)
 and the E6 unit cube (3D, h = 1/8, 2 x 2 x 2 per cell: 4096 particles), ULMPM,
@@ -29,7 +29,9 @@ from solver.scene import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 SCENES = {"2D square h=1/32": (2, 1 / 32), "3D cube h=1/8": (3, 1 / 8)}
-METHODS = [("linear", False), ("linear", True), ("gimp", True), ("cpdi_r4", True), ("cpdi_q4", True)]
+METHODS = [("linear", False), ("linear", True), ("gimp", True), ("cpdi_r4", True), ("cpdi_q4", True),
+           ("cpdi_tet4", True)]
+DIMENSIONS = {"cpdi_q4": 2, "cpdi_tet4": 3}   # quadrilaterals, tetrahedra
 
 
 def stepper(dim: int, h: float, shape: str, general: bool) -> tuple[ExplicitMPM, float]:
@@ -41,7 +43,7 @@ def stepper(dim: int, h: float, shape: str, general: bool) -> tuple[ExplicitMPM,
 
 def compare(dim: int, h: float, rounds: int, steps: int) -> list[str]:
     sims = {(shape, general): stepper(dim, h, shape, general) for shape, general in METHODS
-            if dim == 2 or shape != "cpdi_q4"}   # (quadrilaterals: 2D only)
+            if DIMENSIONS.get(shape, dim) == dim}
     times = round_times(sims, rounds, steps)
     best = {key: min(t) for key, t in times.items()}
     ratios = {key: [a / b for a, b in zip(t, times[("gimp", True)])] for key, t in times.items()}
@@ -59,9 +61,10 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--steps", type=int, default=40)
     parser.add_argument("--only-2d", action="store_true")
+    parser.add_argument("--only-3d", action="store_true")
     args = parser.parse_args()
     for name, (dim, h) in SCENES.items():
-        if args.only_2d and dim != 2:
+        if (args.only_2d and dim != 2) or (args.only_3d and dim != 3):
             continue
         print(f"\n{name}, {args.rounds} rounds of {args.steps} steps\n")
         print("| shape function (backend) | ns per particle-step, best | / gimp | per-round ratios |")

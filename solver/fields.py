@@ -49,8 +49,9 @@ def _particle_domain(sim) -> np.ndarray:
     from solver.shape.kernels.cpdi import CORNERS, LENGTH, domain_corners   # numba: only runs that write it
 
     p = sim.particles
-    if CORNERS in p.extra:   # cpdi_q4's tracked corners, x1 x2 x4 x3 in the order above
-        return p.extra[CORNERS][:, [0, 1, 3, 2]].reshape(p.count, -1)
+    if CORNERS in p.extra:   # the tracked corners: cpdi_q4's x1 x2 x4 x3 in the order above, cpdi_tet4's in it
+        corners = p.extra[CORNERS]
+        return (corners[:, [0, 1, 3, 2]] if corners.shape[1] == 4 else corners).reshape(p.count, -1)
     length = p.extra.get(LENGTH)
     if length is None:
         length = box_sides(sim.scene, p.body)

@@ -958,7 +958,8 @@ def _contact_problems(scene: Scene, names: dict[str, int]) -> list[tuple[str, st
 
 def _field_conflicts(scene: Scene) -> list[tuple[str, str]]:
     """Features whose grid arrays hold one field: they would read or write only the first
-    body's field (or past the end of their arrays) under contact "friction"."""
+    body's field (or past the end of their arrays) under contact "friction"; the tracked
+    corners of cpdi_q4 and cpdi_tet4 move with one field's velocity."""
     problems = []
     if conducts(scene):
         problems.append(("contact.model", f"{scene.contact.model!r} is not supported yet with heat conduction "
@@ -967,9 +968,9 @@ def _field_conflicts(scene: Scene) -> list[tuple[str, str]]:
         if condition.type == "absorbing":
             problems.append((f"boundary_conditions[{i}].type", "absorbing faces are not supported yet with "
                                                                f"contact {scene.contact.model!r}"))
-    if scene.method.shape_function == "cpdi_q4":
-        problems.append(("method.shape_function", "'cpdi_q4' is not supported yet with contact "
-                                                  f"{scene.contact.model!r} (its corners move on one field)"))
+    if shape_functions.REGISTRY[scene.method.shape_function].hook:   # cpdi_q4, cpdi_tet4: tracked corners
+        problems.append(("method.shape_function", f"{scene.method.shape_function!r} is not supported yet with "
+                                                  f"contact {scene.contact.model!r} (its corners move on one field)"))
     return problems
 
 

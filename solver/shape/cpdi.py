@@ -29,6 +29,15 @@ Q4 = replace(R4, name="cpdi_q4", evaluate="evaluate_tracked", hook="hook",
              axisymmetric_refusal=R4.axisymmetric_refusal.replace("cpdi_r4", "cpdi_q4"),
              dimensions=frozenset({2}),
              dimension_refusal="'cpdi_q4' is for 2D scenes (quadrilaterals; the review's 3D tracked domains are "
-                               "tetrahedra, CPDI-Tet4, not implemented): use 'cpdi_r4' in 1D and 3D")
+                               "tetrahedra, 'cpdi_tet4'): use 'cpdi_r4' in 1D and 'cpdi_tet4' or 'cpdi_r4' in 3D")
+# CPDI-Tet4 (3D): the domain's eight corners are tracked as cpdi_q4's four, and the hexahedron
+# they span is split into six tetrahedra (the Kuhn split, conforming between neighbours), each
+# with the review's Tet4 weights (3.6.3); the particle sits at the domain's volume centroid.
+TET4 = replace(Q4, name="cpdi_tet4", hook="hook_tetrahedra",
+               formulation_refusal=R4.formulation_refusal.replace("cpdi_r4", "cpdi_tet4"),
+               axisymmetric_refusal=R4.axisymmetric_refusal.replace("cpdi_r4", "cpdi_tet4"),
+               dimensions=frozenset({3}),
+               dimension_refusal="'cpdi_tet4' is for 3D scenes (tetrahedra): use 'cpdi_q4' or 'cpdi_r4' in 2D "
+                                 "and 'cpdi_r4' in 1D")
 
-SHAPE_FUNCTIONS = (R4, Q4)
+SHAPE_FUNCTIONS = (R4, Q4, TET4)

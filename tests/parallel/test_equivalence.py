@@ -40,10 +40,11 @@ CASES = {
     "contact": scene(SCENE_2D, contact={"model": "friction", "friction": 0.3},
                      boundary_conditions=[{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.2}]),
     "contact-rigid": scene(RIGID_2D, contact={"model": "friction", "friction": 0.2}),
+    "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
-        ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2),
+        ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2)]
 
 

@@ -39,6 +39,7 @@ CASES = {
                                                         "transfer": "apic"}, materials={"rubber": PLASTIC}),
     "3d-musl-linear-flip": scene(SCENE_3D),
     "2d-musl-gimp-flip": scene(SCENE_2D, method__shape_function="gimp"),
+    "3d-musl-cpdi-tet4-flip": scene(SCENE_3D, method__shape_function="cpdi_tet4"),   # corners moved per thread block
     "2d-usl-cubic-apic": scene(SCENE_2D, method={"scheme": "usl", "shape_function": "cubic_bspline",
                                                  "transfer": "apic"}),
     "2d-usl-quadratic-mls": scene(SCENE_2D, method={"scheme": "usl", "shape_function": "quadratic_bspline",

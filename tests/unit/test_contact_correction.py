@@ -186,7 +186,7 @@ def test_density_normals_with_processes_are_refused():
 
 
 def test_one_field_features_are_refused_with_a_field_per_body():
-    """Conduction, absorbing faces and cpdi_q4 keep one grid field: refused, each at its path."""
+    """Conduction, absorbing faces, cpdi_q4 and cpdi_tet4 keep one grid field: refused, each at its path."""
     conducting = {"m": {**BASE["materials"]["m"], "thermal_conductivity": 1.0, "specific_heat": 1.0}}
     assert "heat conduction" in problems({"model": "friction"}, materials=conducting)["contact.model"]
     scene = copy.deepcopy(BASE)
@@ -198,5 +198,13 @@ def test_one_field_features_are_refused_with_a_field_per_body():
     assert "with contact 'friction'" in found["boundary_conditions[0].type"]
     found = problems({"model": "friction"}, method={"shape_function": "cpdi_q4"})
     assert "with contact 'friction'" in found["method.shape_function"]
+    tetrahedra = {**BASE, "dimension": 3, "contact": {"model": "friction"}, "method": {"shape_function": "cpdi_tet4"},
+                  "grid": {"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.1},
+                  "bodies": [{**body, "geometry": {**body["geometry"], "lower": body["geometry"]["lower"] + [0.1],
+                                                   "upper": body["geometry"]["upper"] + [0.4]}}
+                             for body in BASE["bodies"]]}
+    with pytest.raises(SceneError) as error:
+        load_scene(tetrahedra)
+    assert "with contact 'friction'" in {e["path"]: e["message"] for e in error.value.errors}["method.shape_function"]
     load_scene({**BASE, "materials": conducting})   # each is fine with the single field
     load_scene({**BASE, "method": {"shape_function": "cpdi_q4"}})

@@ -36,12 +36,19 @@ def test_partition_of_unity_and_linear_reproduction_with_deformed_domains(dim):
     F = _random_F(len(x), dim, rng)
     outside, s = evaluate("cpdi_r4", x, grid, F)
     assert outside == -1
+    _assert_unity_and_linear(s, grid, x, gradient_sum=1e-12)
+
+
+def _assert_unity_and_linear(s, grid, centre, gradient_sum):
+    """Weights sum to 1 (non-negative) and gradients to 0 (`gradient_sum` per 1/h);
+    sum_I phi_I x_I = centre and sum_I x_I (x) grad phi_I = I."""
+    n, dim = centre.shape
     nodes = grid.node_positions()[s.idx]
     np.testing.assert_allclose(s.w.sum(axis=1), 1.0, atol=1e-12)
-    np.testing.assert_allclose(s.dw.sum(axis=1), 0.0, atol=1e-12 * np.max(grid.inv_h))
-    np.testing.assert_allclose(np.einsum("pk,pka->pa", s.w, nodes), x, atol=1e-12)
+    np.testing.assert_allclose(s.dw.sum(axis=1), 0.0, atol=gradient_sum * np.max(grid.inv_h))
+    np.testing.assert_allclose(np.einsum("pk,pka->pa", s.w, nodes), centre, atol=1e-12)
     np.testing.assert_allclose(np.einsum("pka,pkb->pab", nodes, s.dw),
-                               np.broadcast_to(np.eye(dim), (len(x), dim, dim)), atol=1e-11)
+                               np.broadcast_to(np.eye(dim), (n, dim, dim)), atol=1e-11)
     assert np.all(s.w >= -1e-15)
 
 
@@ -156,11 +163,14 @@ def test_particle_domain_field_is_the_seeded_box_carried_by_F():
         np.testing.assert_allclose(corners[:, c], p.x + np.array([1.5 * sx + 0.2 * sy, 0.8 * sy]) * half, atol=1e-15)
 
 
-def _evaluate_q4(x, corners, grid):
-    module = shape.get("cpdi_q4")
-    stencil = make_stencil(len(x), 2, 4)
+def _evaluate_tracked(x, corners, grid):
+    """cpdi_q4 (2D) or cpdi_tet4 (3D) on the given tracked corners."""
+    dim = x.shape[1]
+    module = shape.get({2: "cpdi_q4", 3: "cpdi_tet4"}[dim])
+    stencil = make_stencil(len(x), dim, 4)
     particles = SimpleNamespace(extra={"domain_corners": np.ascontiguousarray(corners)})
-    outside = shape.evaluate(module, kernels.stencil_spec(2, 16), np.ascontiguousarray(x), particles, grid, stencil)
+    outside = shape.evaluate(module, kernels.stencil_spec(dim, 4 ** dim), np.ascontiguousarray(x), particles, grid,
+                             stencil)
     return outside, stencil
 
 
@@ -174,7 +184,7 @@ def test_q4_on_a_parallelogram_is_r4():
     F = _random_F(len(x), 2, rng)
     corners = domain_corners(x, np.repeat(grid.h[None] / 2, len(x), axis=0), F)[:, [0, 1, 3, 2]]   # counter-clockwise
     _, r4 = evaluate("cpdi_r4", x, grid, F)
-    outside, q4 = _evaluate_q4(x, corners, grid)
+    outside, q4 = _evaluate_tracked(x, corners, grid)
     assert outside == -1
     np.testing.assert_array_equal(q4.idx, r4.idx)
     np.testing.assert_allclose(q4.w, r4.w, atol=1e-13)
@@ -190,7 +200,7 @@ def test_q4_on_random_quadrilaterals_reproduces_the_centroid_and_linear_gradient
     x = _inside(grid, 200, rng, 1.0)
     square = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
     corners = x[:, None, :] + (square[None] + rng.uniform(-0.3, 0.3, size=(len(x), 4, 2))) * grid.h / 4
-    outside, s = _evaluate_q4(x, corners, grid)
+    outside, s = _evaluate_tracked(x, corners, grid)
     assert outside == -1
     nodes = grid.node_positions()[s.idx]
     np.testing.assert_allclose(s.w.sum(axis=1), 1.0, atol=1e-12)
@@ -215,3 +225,108 @@ def test_q4_is_refused_outside_2d():
     with pytest.raises(SceneError) as error:
         load_scene(scene)
     assert any(e["path"] == "method.shape_function" and "2D" in e["message"] for e in error.value.errors)
+
+
+# --------------------------------------------------------------------------- CPDI-Tet4
+
+def _kuhn_volumes_and_centroids(corners):
+    """The six tetrahedra {0, e_i, e_i + e_j, 7} of each hexahedron (corners axis 0 fastest),
+    written here with numpy's determinant, signed by the parity of the axis order (i, j, k)
+    so that an unfolded domain's are positive: (n, 6) volumes and (n, 6, 3) centroids."""
+    from itertools import permutations
+    orders = list(permutations(range(3)))
+    tets = [[0, 1 << i, (1 << i) | (1 << j), 7] for i, j, _ in orders]
+    parity = np.array([np.linalg.det(np.eye(3)[list(order)]) for order in orders])
+    v = corners[:, tets]                                   # (n, 6, 4, 3)
+    edges = np.swapaxes(v[:, :, 1:] - v[:, :, :1], 2, 3)   # edge vectors as columns
+    return parity * np.linalg.det(edges) / 6, v.mean(axis=2)
+
+
+def test_tet4_partition_of_unity_and_linear_reproduction_on_distorted_hexahedra():
+    """Each domain a hexahedron of side h/2 with every corner moved by up to 0.15 of that side
+    (convex enough that all six tetrahedra keep a positive volume): the weights sum to 1
+    and the gradients to 0; sum_I phi_I x_I is the domain's volume centroid (the weights are the
+    domain averages of the hats' linear interpolants on the tetrahedra, [R] 3.6.3) and
+    sum_I x_I (x) grad phi_I = I (a linear field's gradient is exact). Round-off: 1e-12."""
+    from solver.shape.kernels.cpdi import domain_corners
+    rng = np.random.default_rng(41)
+    grid = make_grid(3)
+    x = _inside(grid, 200, rng, 1.0)
+    side = np.repeat(grid.h[None] / 2, len(x), axis=0)
+    box = domain_corners(x, side, np.broadcast_to(np.eye(3), (len(x), 3, 3)))
+    corners = box + rng.uniform(-0.15, 0.15, size=box.shape) * side[:, None, :]
+    volumes, centroids = _kuhn_volumes_and_centroids(corners)
+    assert np.all(volumes > 0)
+    centroid = np.einsum("pt,pta->pa", volumes, centroids) / volumes.sum(axis=1)[:, None]
+    outside, s = _evaluate_tracked(x, corners, grid)
+    assert outside == -1
+    _assert_unity_and_linear(s, grid, centroid, gradient_sum=1e-11)
+
+
+def test_tet4_refuses_a_folded_domain():
+    """A hexahedron with two corners swapped has tetrahedra of negative volume: the weights
+    stop at that particle rather than give negative masses."""
+    from solver.shape.kernels.cpdi import domain_corners
+    grid = make_grid(3)
+    x = _inside(grid, 3, np.random.default_rng(3), 1.0)
+    side = np.repeat(grid.h[None] / 2, len(x), axis=0)
+    corners = domain_corners(x, side, np.broadcast_to(np.eye(3), (len(x), 3, 3)))
+    corners[1, [0, 7]] = corners[1, [7, 0]]
+    outside, _ = _evaluate_tracked(x, corners, grid)
+    assert outside == 1
+
+
+
+def test_tet4_refuses_a_domain_beyond_its_stencil():
+    """E28 for CPDI-Tet4: a domain stretched to 5 cells along x (its corners beyond the
+    cells next to the particle's own) stops at that particle."""
+    from solver.shape.kernels.cpdi import domain_corners
+    grid = make_grid(3, cells=12)
+    x = grid.lower + 6.0 * grid.h + 0.1 * grid.h
+    x = np.repeat(x[None], 2, axis=0)
+    side = np.repeat(grid.h[None] / 2, 2, axis=0)
+    side[1, 0] = 5.0 * grid.h[0]
+    corners = domain_corners(x, side, np.broadcast_to(np.eye(3), (2, 3, 3)))
+    outside, _ = _evaluate_tracked(x, corners, grid)
+    assert outside == 1
+
+
+def _scene_3d(**method):
+    scene = _scene(**method)
+    scene.update(dimension=3, grid={"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.125},
+                 gravity=[0.0, 0.0, -10.0], boundary_conditions=[{"type": "wall", "face": "z-", "mode": "slip"}],
+                 time={"end": 0.25, "dt": 1e-3})
+    scene["bodies"][0]["geometry"] = {"type": "box", "lower": [0.25, 0.25, 0.0], "upper": [0.75, 0.75, 0.5]}
+    scene["materials"]["m"].update(youngs_modulus=2000.0, density=100.0)
+    return scene
+
+
+def test_tet4_3d_run_tracks_the_domains_and_keeps_each_particle_at_its_centroid():
+    """A soft block settling on a slip floor under gravity (250 steps): the corners move
+    (the block sags), the particle sits at its hexahedron's volume centroid (eq. 3.39), the
+    domains still tile the block (their volumes sum to the volume of the block's hull of
+    corners, which a gap or an overlap would change: checked as the sum against the sum of the
+    particles' V = V0 det F, equal to O(strain^2) -- 1e-3 here), and the `particle_domain` field
+    is the tracked corners."""
+    from solver.fields import field
+    from solver.scene import load_scene
+    from solver.stepper import ExplicitMPM
+    sim = ExplicitMPM(load_scene(_scene_3d(shape_function="cpdi_tet4")))
+    p = sim.particles
+    start = p.extra["domain_corners"].copy()
+    for _ in range(250):
+        sim.advance(1e-3)
+    corners = p.extra["domain_corners"]
+    assert np.max(np.abs(corners - start)) > 1e-3               # they moved (the block sagged ~ rho g H^2 / E)
+    volumes, centroids = _kuhn_volumes_and_centroids(corners)
+    np.testing.assert_allclose(np.einsum("pt,pta->pa", volumes, centroids) / volumes.sum(axis=1)[:, None], p.x,
+                               atol=1e-12)
+    assert abs(volumes.sum() / p.volume.sum() - 1) < 1e-3
+    np.testing.assert_array_equal(field("particle_domain")(sim).reshape(p.count, 8, 3), corners)
+
+
+def test_tet4_is_refused_outside_3d():
+    from solver.scene import SceneError, load_scene
+    with pytest.raises(SceneError) as error:
+        load_scene(_scene(shape_function="cpdi_tet4"))
+    assert any(e["path"] == "method.shape_function" and "3D" in e["message"] for e in error.value.errors)

@@ -199,7 +199,7 @@ class TestBuiltFromTheRegistries:
     def test_shape_function_values_are_the_registry(self):
         method = Scene.model_json_schema()["$defs"]["Method"]["properties"]["shape_function"]
         assert method["enum"] == list(shape.REGISTRY) == ["linear", "gimp", "cpgimp", "cubic_bspline",
-                                                           "quadratic_bspline", "bernstein", "cpdi_r4", "cpdi_q4"]
+                                                           "quadratic_bspline", "bernstein", "cpdi_r4", "cpdi_q4", "cpdi_tet4"]
         assert set(capabilities.SHAPE_FUNCTIONS) == set(shape.REGISTRY)
 
     def test_a_capability_can_still_be_withdrawn(self, monkeypatch):

@@ -43,12 +43,19 @@ SQUARE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])   # x1..
 
 
 def prepare(scene, particles) -> None:
-    """The seeded boxes (both), and cpdi_q4's corners: the boxes' corners at t = 0."""
+    """The seeded boxes (all), and the tracked corners (cpdi_q4, cpdi_tet4): the boxes' corners
+    at t = 0 (cpdi_q4 counter-clockwise, cpdi_tet4 axis 0 fastest as `domain_corners`)."""
     gimp.prepare(scene, particles)
-    if scene.method.shape_function != "cpdi_q4" or CORNERS in particles.extra:   # (restored from a checkpoint)
+    name = scene.method.shape_function
+    if name not in ("cpdi_q4", "cpdi_tet4") or CORNERS in particles.extra:   # (restored from a checkpoint)
         return
-    corners = particles.require(CORNERS, (4, 2))
-    corners[:] = particles.x[:, None, :] + 0.5 * particles.extra[LENGTH][:, None, :] * SQUARE[None]
+    length = particles.extra[LENGTH]
+    if name == "cpdi_q4":
+        corners = particles.require(CORNERS, (4, 2))
+        corners[:] = particles.x[:, None, :] + 0.5 * length[:, None, :] * SQUARE[None]
+    else:
+        corners = particles.require(CORNERS, (8, 3))
+        corners[:] = domain_corners(particles.x, length, np.broadcast_to(np.eye(3), (particles.count, 3, 3)))
 
 
 def evaluate(spec, x, particles, grid, stencil, blocks) -> int:
@@ -57,7 +64,7 @@ def evaluate(spec, x, particles, grid, stencil, blocks) -> int:
 
 
 def evaluate_tracked(spec, x, particles, grid, stencil, blocks) -> int:
-    """cpdi_q4: the tracked corners."""
+    """cpdi_q4 and cpdi_tet4: the tracked corners (4 in 2D, 8 in 3D)."""
     return weights_tracked(spec, x, particles.extra[CORNERS], grid.lower, grid.inv_h, grid.cells, grid.strides,
                            stencil.idx, stencil.w, stencil.dw, blocks)
 
@@ -78,7 +85,8 @@ def failure(x, particles, grid, index):
             f"spans {np.array2string(extent, precision=3)} cells per axis and reaches beyond the cells next to "
             "its own, which its stencil covers (larger domains leave holes in CPDI's weights, review 3.7): a "
             "domain is h / particles_per_cell stretched by F, so seed more particles per cell, or use a shape "
-            "function without domains ('gimp', 'cubic_bspline'); a cpdi_q4 domain may also have folded")
+            "function without domains ('gimp', 'cubic_bspline'); a tracked (cpdi_q4, cpdi_tet4) domain may "
+            "also have folded")
 
 
 def domain_corners(x, length, F) -> np.ndarray:
@@ -193,18 +201,33 @@ def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
 
 # --------------------------------------------------------------------------- CPDI-Q4
 
+@njit(cache=True)
+def _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
+    """_scatter with the tracked corners q (2^d, d) in cells from the grid's lower end (`at`)."""
+    for c in range(q.shape[0]):
+        for d in range(q.shape[1]):
+            at[c, d] = (q[c, d] - lower[d]) * inv_h[d]
+    return _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw)
+
+
 @njit(parallel=True, cache=True)
 def weights_tracked(spec, x, corners, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """CPDI-Q4 (review eqs. 3.36-3.37, the sign of eq. 3.37 corrected as the spec says): the
-    weights of a quadrilateral from its four tracked corners."""
+    weights of a quadrilateral from its four tracked corners; CPDI-Tet4 (3D): of the
+    hexahedron of eight, as six tetrahedra (below)."""
     dims, nodes = spec
-    if SUPPORT ** len(dims) != len(nodes) or len(dims) != 2:
-        raise ValueError("cpdi_q4: 2D, 4 nodes per axis")
+    dim = len(dims)
+    if SUPPORT ** dim != len(nodes) or corners.shape[1] != 2 ** dim or dim == 1:
+        raise ValueError("cpdi_q4 / cpdi_tet4: 2D / 3D, 4 nodes per axis, 2^d corners")
     bounds = block_bounds(x.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
-        bad[t] = _tracked_block(nodes, bounds[t], bounds[t + 1], x, corners, lower, inv_h, cells, strides,
-                                idx, w, dw)
+        if dim == 2:
+            bad[t] = _tracked_block(nodes, bounds[t], bounds[t + 1], x, corners, lower, inv_h, cells, strides,
+                                    idx, w, dw)
+        else:
+            bad[t] = _tetrahedra_block(nodes, bounds[t], bounds[t + 1], x, corners, lower, inv_h, cells, strides,
+                                       idx, w, dw)
     return first_of(bad)
 
 
@@ -230,10 +253,7 @@ def _tracked_block(nodes, start, stop, x, corners, lower, inv_h, cells, strides,
         gw[1, 0], gw[1, 1] = (y3 - y1) / (2 * V), (x1 - x3) / (2 * V)
         gw[2, 0], gw[2, 1] = (y4 - y2) / (2 * V), (x2 - x4) / (2 * V)
         gw[3, 0], gw[3, 1] = (y1 - y3) / (2 * V), (x3 - x1) / (2 * V)
-        for c in range(4):
-            for d in range(2):
-                at[c, d] = (q[c, d] - lower[d]) * inv_h[d]
-        if not _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
+        if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
             return p
     return -1
 
@@ -245,9 +265,10 @@ def move_corners(corners, x, v_grid, lower, inv_h, cells, strides, offset, dt, b
     particle and domain stay one (moved apart, the particle's stencil and its domain drift)."""
     bounds = block_bounds(corners.shape[0], blocks)
     for t in prange(blocks):
+        first, frac, v = np.empty(2, dtype=np.int64), np.empty(2), np.empty(2)
         for p in range(bounds[t], bounds[t + 1]):
             for c in range(4):
-                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt)
+                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt, first, frac, v)
             _centroid(corners[p], x[p])
 
 
@@ -264,37 +285,136 @@ def _centroid(q, out):
 
 
 @njit(cache=True)
-def _move_corner(corner, v_grid, lower, inv_h, cells, strides, offset, dt):
-    first = np.empty(2, dtype=np.int64)
-    frac = np.empty(2)
-    for a in range(2):
+def _move_corner(corner, v_grid, lower, inv_h, cells, strides, offset, dt, first, frac, v):
+    """x_c += dt sum_I N_I(x_c) v_I over the 2^d nodes of the corner's cell (moved onto the
+    grid); first, frac, v: scratch arrays of length d (allocated once per block)."""
+    dim = corner.shape[0]
+    for a in range(dim):
+        v[a] = 0.0
+    for a in range(dim):
         s = min(max((corner[a] - lower[a]) * inv_h[a], 0.0), float(cells[a]))
         first[a] = min(int(s), cells[a] - 1)
         frac[a] = s - first[a]
-    vx = vy = 0.0
-    for j in range(4):
+    for j in range(2 ** dim):
         N = 1.0
         node = -offset
-        for a in range(2):
+        for a in range(dim):
             bit = (j >> a) & 1
             N *= frac[a] if bit else 1.0 - frac[a]
             node += (first[a] + bit) * strides[a]
-        vx += N * v_grid[node, 0]
-        vy += N * v_grid[node, 1]
-    corner[0] += dt * vx
-    corner[1] += dt * vy
+        for a in range(dim):
+            v[a] += N * v_grid[node, a]
+    for a in range(dim):
+        corner[a] += dt * v[a]
 
 
 class TrackedCorners:
-    """cpdi_q4's hook (solver/step/hooks.py): the corners move with the grid velocity the
-    particles just took (eq. 3.38; review Algorithm 5: at the end of every step)."""
+    """cpdi_q4's and cpdi_tet4's hook (solver/step/hooks.py): the corners move with the grid
+    velocity the particles just took (eq. 3.38; review Algorithm 5: at the end of every step)."""
+
+    def __init__(self, move):
+        self.move = move
 
     def after_g2p(self, sim, dt: float) -> None:
         f = sim.frame
         p = sim.particles
-        move_corners(p.extra[CORNERS], p.x, sim.grid.v_new, f.lower, f.inv_h, f.cells, f.strides, f.offset, dt,
-                     sim.threads)
+        self.move(p.extra[CORNERS], p.x, sim.grid.v_new, f.lower, f.inv_h, f.cells, f.strides, f.offset, dt,
+                  sim.threads)
 
 
 def hook(sim):
-    return TrackedCorners()
+    return TrackedCorners(move_corners)
+
+
+def hook_tetrahedra(sim):
+    return TrackedCorners(move_corners_tetrahedra)
+
+
+# --------------------------------------------------------------------------- CPDI-Tet4
+
+# The Kuhn (Freudenthal) split of a hexahedron into six tetrahedra around its diagonal from
+# corner 0 to corner 7 (corners numbered axis 0 fastest): tetrahedron {0, e_i, e_i + e_j, 7}
+# for each order (i, j, k) of the axes, its middle vertices swapped for the odd orders so
+# that every one is positively oriented. Every box of a lattice split this way shares its
+# faces' triangles with its neighbours', so tracked domains tile the body as CPDI-Q4's do.
+KUHN = np.array([[0, 1 << i, (1 << i) | (1 << j), 7] for i, j in ((0, 1), (1, 2), (2, 0))]
+                + [[0, (1 << i) | (1 << j), 1 << i, 7] for i, j in ((0, 2), (1, 0), (2, 1))], dtype=np.int64)
+
+
+@njit(cache=True)
+def tetrahedra_weights(q, tets, wf, gw, centroid, J, Jinv):
+    """The corner weights of the hexahedron q (8, 3) as the union of its tetrahedra: the
+    domain average of the hats' piecewise-linear interpolant on the tetrahedra,
+    wf_c = sum_t V_t / (4 V) [c in t] and gw_c = sum_t V_t / V grad lambda_c^t
+    ([R] 3.6, CPDI-Tet4, eqs. 3.40-3.41 per tetrahedron, volume-averaged); `centroid`
+    gets the domain's volume centroid (J, Jinv: 3 x 3 scratch). Returns V, or <= 0 where a
+    tetrahedron folded."""
+    for c in range(8):
+        wf[c] = 0.0
+        for a in range(3):
+            gw[c, a] = 0.0
+    for a in range(3):
+        centroid[a] = 0.0
+    total = 0.0
+    for t in range(tets.shape[0]):
+        v0 = tets[t, 0]
+        for b in range(3):
+            for a in range(3):
+                J[a, b] = q[tets[t, b + 1], a] - q[v0, a]   # the edges from the first vertex as columns
+        volume = invert(J, Jinv) / 6.0
+        if not volume > 0.0:   # a folded tetrahedron (also NaN)
+            return -1.0
+        total += volume
+        for a in range(3):
+            g0 = 0.0
+            for b in range(3):
+                gw[tets[t, b + 1], a] += volume * Jinv[b, a]   # grad lambda_b = row b of J^-1
+                g0 -= Jinv[b, a]
+            gw[v0, a] += volume * g0
+            centroid[a] += volume * 0.25 * (q[v0, a] + q[tets[t, 1], a] + q[tets[t, 2], a] + q[tets[t, 3], a])
+        for b in range(4):
+            wf[tets[t, b]] += 0.25 * volume
+    for c in range(8):
+        wf[c] /= total
+        for a in range(3):
+            gw[c, a] /= total
+    for a in range(3):
+        centroid[a] /= total
+    return total
+
+
+@njit(cache=True)
+def _tetrahedra_block(nodes, start, stop, x, corners, lower, inv_h, cells, strides, idx, w, dw):
+    base = np.empty(3, dtype=np.int64)
+    at = np.empty((8, 3))
+    wf = np.empty(8)
+    gw = np.empty((8, 3))
+    centroid = np.empty(3)
+    J, Jinv = np.empty((3, 3)), np.empty((3, 3))
+    for p in range(start, stop):
+        if not _first_nodes(p, x, lower, inv_h, cells, base):
+            return p
+        q = corners[p]
+        if not tetrahedra_weights(q, KUHN, wf, gw, centroid, J, Jinv) > 0.0:
+            return p
+        if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
+            return p
+    return -1
+
+
+@njit(parallel=True, cache=True)
+def move_corners_tetrahedra(corners, x, v_grid, lower, inv_h, cells, strides, offset, dt, blocks):
+    """Eq. 3.38 for the eight corners, then the particle at its domain's volume centroid."""
+    bounds = block_bounds(corners.shape[0], blocks)
+    for t in prange(blocks):
+        wf = np.empty(8)
+        gw = np.empty((8, 3))
+        centroid = np.empty(3)
+        first, frac, v = np.empty(3, dtype=np.int64), np.empty(3), np.empty(3)
+        J, Jinv = np.empty((3, 3)), np.empty((3, 3))
+        for p in range(bounds[t], bounds[t + 1]):
+            for c in range(8):
+                _move_corner(corners[p, c], v_grid, lower, inv_h, cells, strides, offset, dt, first, frac, v)
+            # a folded domain keeps its particle where it was: the next weights stop the run there
+            if tetrahedra_weights(corners[p], KUHN, wf, gw, centroid, J, Jinv) > 0.0:
+                x[p, :] = centroid
