@@ -324,8 +324,10 @@ class _OwnedConstraints:
         self._whole, self._keep = whole, keep
         self.axis = np.ascontiguousarray(whole.axis[keep])
         self.value = np.ascontiguousarray(whole.value[keep])
-        self.condition = whole.condition[keep]
         self.time_dependent = whole.time_dependent
+        if not isinstance(whole, Constraints):   # other nodal values (held temperatures, solver/thermal.py)
+            return
+        self.condition = whole.condition[keep]
         friction_node, kept = owned_local(whole.friction_node)
         self.friction_node = friction_node
         self.friction_axis, self.friction_sign, self.friction_mu = (
