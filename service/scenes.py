@@ -32,20 +32,22 @@ def check_scene(document: dict[str, Any], settings: ApiSettings) -> tuple[str, d
     The limits (MPM_MAX_PARTICLES, ...) are checked on counts computed from the
     scene, before anything is allocated; their errors name the setting."""
     try:
-        scene = load_scene(document)
+        scene = load_scene(document, stability=False)
     except SceneError as exc:
         raise validation_error(exc.errors, "the scene is not valid") from None
     limits = Limits(max_particles=settings.max_particles, max_grid_nodes=settings.max_grid_nodes,
                     max_steps=settings.max_steps)
     try:
-        load_scene(scene, limits=limits)
+        load_scene(scene, limits=limits)   # the limits, then (within them) the time step's stability
     except SceneError as exc:
         details = []
         for error in exc.errors:
             setting = _LIMIT_SETTINGS.get(error["path"])
             message = f"{error['message']} ({setting})" if setting else error["message"]
             details.append({**error, "message": message, "limit": setting})
-        raise validation_error(details, "the scene is over the service's limits") from None
+        over = any(detail["limit"] for detail in details)
+        raise validation_error(details, "the scene is over the service's limits" if over
+                               else "the scene is not valid") from None
     summary = summarize(scene).model_dump(mode="json")
     return scene.model_dump_json(), summary
 

@@ -872,9 +872,6 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     problems += _contact_problems(scene, names)
     if grid_ok:
         problems += slab_problems(scene)
-    if not problems:   # the limit reads the materials, bodies and grid: only once they are sound
-        from solver.stability import time_step_problems   # (it reads this module's constants)
-        problems += time_step_problems(scene)
     return problems
 
 
@@ -1136,12 +1133,14 @@ MACHINE_LIMITS = Limits(max_particles=10**8, max_grid_nodes=10**9)
 
 
 def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None,
-               files: "str | Path | None" = None) -> Scene:
+               files: "str | Path | None" = None, stability: bool = True) -> Scene:
     """Validate a scene given as a path to a JSON file, JSON text, a dict or a Scene.
 
     `files`: the folder the scene's relative file names (mesh files) start from; a scene
     read from a file reads them beside it. Without it a scene given as a document may not
     name files at all (what the service relies on: it never opens a path named in a scene).
+    `stability`: refuse a fixed time.dt above the stability limit (solver/stability.py),
+    after the limits, so that an absurd scene is refused for its size.
 
     Raises SceneError listing every problem found."""
     if isinstance(source, Scene):
@@ -1154,10 +1153,12 @@ def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None
             scene = Scene.model_validate(data, context={"files": files})
         except ValidationError as exc:
             raise SceneError(_format_errors(exc, data)) from None
-    if limits is not None:
-        problems = _limit_problems(scene, limits)
-        if problems:
-            raise SceneError([{"path": path, "message": message} for path, message in problems])
+    problems = _limit_problems(scene, limits) if limits is not None else []
+    if stability and not problems:   # the stability limit reads a sound scene of a size within the limits
+        from solver.stability import time_step_problems   # (it reads this module's constants)
+        problems = time_step_problems(scene)
+    if problems:
+        raise SceneError([{"path": path, "message": message} for path, message in problems])
     return scene
 
 

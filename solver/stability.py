@@ -85,13 +85,22 @@ def _largest_speed(scene, body) -> float:
         return _largest_norm(body.velocity, TIME_VARIABLES, values)
     if body.initial_velocity is None:
         return 0.0
-    lower, upper = body.geometry.shape().bounding_box()
-    lattice = np.meshgrid(*(np.linspace(lo, up, _SAMPLES_PER_AXIS) for lo, up in zip(lower, upper)), indexing="ij")
-    points = np.stack([axis.ravel() for axis in lattice], axis=1)
-    inside = body.geometry.shape().contains(points)
-    points = points[inside] if np.any(inside) else points
+    points = _sample_points(body.geometry.shape())
     values = {name: points[:, a] for a, name in enumerate(SPACE_VARIABLES[:points.shape[1]])}
     return _largest_norm(body.initial_velocity, SPACE_VARIABLES, values)
+
+
+def _sample_points(region) -> np.ndarray:
+    """Points of a lattice over the region's box that are inside it (all of them if none is);
+    a body given as its particles (`points`) is sampled at those."""
+    positions = getattr(region, "positions", None)
+    if positions is not None:
+        return positions
+    lower, upper = region.bounding_box()
+    lattice = np.meshgrid(*(np.linspace(lo, up, _SAMPLES_PER_AXIS) for lo, up in zip(lower, upper)), indexing="ij")
+    points = np.stack([axis.ravel() for axis in lattice], axis=1)
+    inside = region.contains(points)
+    return points[inside] if np.any(inside) else points
 
 
 def _largest_norm(components: list[float | str], variables: tuple[str, ...], values: dict) -> float:

@@ -87,7 +87,7 @@ def labelled_scene(axisymmetric: bool):
         "materials": {"m": {"model": "linear_elastic", "density": 7.8e-9, "youngs_modulus": 2e5,
                             "poisson_ratio": 0.3}},
         "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0, 2], "upper": [4, 6]}}],
-        "time": {"end": 1.0, "dt": 0.01},
+        "time": {"end": 1.0},
         "units": {"length": "mm", "time": "ms", "mass": "t", "stress": "MPa"},
     })
 
