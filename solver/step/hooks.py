@@ -25,8 +25,8 @@ boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress),
-F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (cpdi_q4's
-corners, after_g2p).
+F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (the tracked
+corners of cpdi_q4 and cpdi_tet4, after_g2p).
 
 A hook that needs the stored stencil (the hoop terms, conduction) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
