@@ -17,7 +17,8 @@ from solver.mesh import inline_files
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 STEPS = 20
 SMOOTH = ("quadratic_bspline", "cubic_bspline")   # the shape functions transfer "mls" takes
-HEAVY = {"hypervelocity_lead": 8, "taylor_bar_3d": 10, "taylor_bar_3d_tlmpm": 10}   # 19k-37k particles in 3D
+HEAVY = {"hypervelocity_lead": 8, "taylor_bar_3d": 10, "taylor_bar_3d_tlmpm": 10,   # 19k-37k particles in 3D
+         "cold_spray_3d_quarter": 5}                                                # 77k
 
 
 @dataclass
