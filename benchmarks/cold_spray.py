@@ -52,10 +52,8 @@ def run_variant(key: str, out: Path, threads: int, rerun: bool) -> dict:
         if result.status != "complete":
             raise SystemExit(f"{key}: {result.status}: {result.message}")
         (folder / "wall_seconds").write_text(f"{wall}\n")
-        steps, particles = result.steps, result.particles
-    else:
-        wall = float((folder / "wall_seconds").read_text()) if (folder / "wall_seconds").exists() else float("nan")
-        steps, particles = None, None
+    wall_file = folder / "wall_seconds"
+    wall = float(wall_file.read_text()) if wall_file.exists() else float("nan")
     series = read_series(result_file)
     final = read_frame(result_file, -1)
     measures = splat_measures(final, scene)
@@ -65,8 +63,7 @@ def run_variant(key: str, out: Path, threads: int, rerun: bool) -> dict:
     kinetic0 = series["kinetic_energy"][0]
     measures |= {
         "label": label, "scene": scene, "final": final, "wall": wall,
-        "steps": steps if steps is not None else len(series["time"]) - 1,
-        "particles": particles if particles is not None else len(final["fields"]["mass"]),
+        "steps": len(series["time"]) - 1, "particles": len(final["fields"]["mass"]),
         "kinetic_end": series["kinetic_energy"][-1] / kinetic0,
         "closure": (plastic_work(final, scene) + series["total_energy"][-1]) / kinetic0 if not conduction else None,
     }
