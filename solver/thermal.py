@@ -196,13 +196,16 @@ class Conduction:
         mc = p.mass * p.extra["heat_capacity"]
         self.cutoff = CAPACITY_CUTOFF_FRACTION * float(mc[mc > 0].min()) if np.any(mc > 0) else 0.0
         self.boundary_heat = 0.0   # heat that entered through heat_flux and convection faces (J)
+        self.unheld_friction_heat = 0.0   # frictional heat on nodes without capacity (a body that holds none)
         whole = grid_geometry(scene)
         self._held_whole = held_temperatures(scene, whole)
         self._faces = FaceHeat(scene, whole)
 
     def place(self, sim) -> "Conduction":
-        """Nodal arrays for this process's grid; the conditions on the nodes it owns."""
-        n = sim.grid.n_nodes
+        """Nodal arrays for this process's grid (every field of it: contact has one per body);
+        the conditions on the nodes it owns."""
+        n = sim.grid.mass.shape[0]
+        self.n_nodes = sim.grid.n_nodes
         self.heat = np.zeros((n, 3))
         self.T_old, self.T_new, self.remapped = np.zeros(n), np.zeros(n), np.zeros(n)
         self.copies_heat = np.zeros((sim.threads - 1, n, 3))
@@ -210,6 +213,10 @@ class Conduction:
         self.held = sim.domain.owned(self._held_whole, sim.grid)
         self.faces = sim.domain.owned(self._faces.whole, sim.grid)
         self.T_now = self.held.value.copy()   # T* at t; held.value is T* at t + dt
+        # contact: the fields exchange heat where the bodies touch; friction heats them there
+        self.contact = getattr(sim, "field_contact", None)
+        self.touching = np.zeros(self.n_nodes if self.contact is not None else 0, dtype=np.bool_)
+        self.exchanges = self.contact is not None or sim.friction_heat.size > 0
         return self
 
     def begin_step(self, sim, t_end: float) -> None:
@@ -230,22 +237,44 @@ class Conduction:
     def before_update(self, sim, dt: float) -> None:
         faces = self._faces
         rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
-                                             faces.ambient, self.faces.axis, self.heat, self.cutoff)
+                                             faces.ambient, self.faces.axis, self.n_nodes, self.heat, self.cutoff)
         self.boundary_heat += dt * rate
         thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new)
-        thermal_kernels.hold(self.held.node, self.T_now, self.T_old)
-        thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
+        if not self.exchanges:   # (else once the step's frictional heat is known: after_g2p)
+            self._hold_and_share(sim)
+
+    def _hold_and_share(self, sim) -> None:
+        thermal_kernels.hold(self.held.node, self.T_now, self.n_nodes, self.T_old)
+        thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_old, self.T_new)
+
+    def _exchange(self, sim) -> None:
+        """Contact and frictional walls, before the particles take the grid's temperature change:
+        the touching fields share T_I^t and T~_I^{t+dt} (perfect thermal contact, each keeping
+        sum C T), and the frictional work of this step's velocity update (sim.friction_heat, on
+        the nodes this process owns) goes into T~ (solver/thermal_kernels.py)."""
+        if self.contact is not None:
+            self.contact.touching(self.touching)
+            thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_old)
+            thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
+        if sim.friction_heat.size:
+            self.unheld_friction_heat += thermal_kernels.deposit_heat(self.heat, self.touching, self.n_nodes,
+                                                                      self.cutoff, sim.friction_heat, self.T_new)
+        self._hold_and_share(sim)
 
     def after_g2p(self, sim, dt: float) -> None:
         p, s = sim.particles, sim.stencil
         x = p.extra
+        if self.exchanges:
+            self._exchange(sim)
         self.remapped.fill(0.0)
         thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
                                   x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
         thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new)
-        thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
+        if self.contact is not None:   # the flux at a contact node: from the touching fields' one temperature
+            thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
+        thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_new)
         thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
                                       sim.threads)

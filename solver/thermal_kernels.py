@@ -64,25 +64,106 @@ def integrate(dt, heat, cutoff, T_old, T_new):
 
 
 @njit(cache=True)
-def boundary_heat(node, area, flux, coefficient, ambient, which, heat, cutoff):
+def boundary_heat(node, area, flux, coefficient, ambient, which, n_nodes, heat, cutoff):
     """Q_I += A_I (q* + h (T_amb - T_I^t)) on the faces' nodes that have capacity, with
-    T_I^t = (C T)_I / C_I; returns the heat rate that entered (W)."""
+    T_I^t = (C T)_I / C_I over the node's fields (contact: one per body) that have capacity,
+    each field taking its share C_f / C_I of the rate; returns the heat rate that entered (W).
+    With one field the share is C / C = 1 exactly: the same bits as a field-free sum."""
+    fields = heat.shape[0] // n_nodes
     total = 0.0
     for j in range(node.shape[0]):
         i = node[j]
-        if heat[i, 0] > cutoff:
+        capacity = 0.0
+        weighted = 0.0
+        for f in range(fields):
+            e = f * n_nodes + i
+            if heat[e, 0] > cutoff:
+                capacity += heat[e, 0]
+                weighted += heat[e, 1]
+        if capacity > 0.0:
             c = which[j]
-            rate = area[j] * (flux[c] + coefficient[c] * (ambient[c] - heat[i, 1] / heat[i, 0]))
-            heat[i, 2] += rate
+            rate = area[j] * (flux[c] + coefficient[c] * (ambient[c] - weighted / capacity))
+            for f in range(fields):
+                e = f * n_nodes + i
+                if heat[e, 0] > cutoff:
+                    heat[e, 2] += rate * (heat[e, 0] / capacity)
             total += rate
     return total
 
 
 @njit(cache=True)
-def hold(node, value, T_grid):
-    """Dirichlet nodes: T_I = T* (Algorithm 8, lines 10 and 14)."""
-    for j in range(node.shape[0]):
-        T_grid[node[j]] = value[j]
+def hold(node, value, n_nodes, T_grid):
+    """Dirichlet nodes: T_I = T* (Algorithm 8, lines 10 and 14), in every field."""
+    for f in range(T_grid.shape[0] // n_nodes):
+        for j in range(node.shape[0]):
+            T_grid[f * n_nodes + node[j]] = value[j]
+
+
+# Contact with a field per body (solver/contact.py): perfect thermal contact. At a node
+# where the bodies touch, the fields that hold heat there are one thermal field: each
+# takes the capacity-weighted mean sum_f C_f T_f / sum_f C_f, which keeps sum_f C_f T_f,
+# so the heat the particles take, sum_I C_I (T~_I - T_I), is unchanged by the exchange.
+# Two bodies that stay in contact conduct as the single field conducts them.
+
+@njit(cache=True)
+def share_temperature(heat, touching, n_nodes, cutoff, T_grid):
+    """At the nodes `touching` marks, the fields with capacity take their C-weighted mean T."""
+    fields = heat.shape[0] // n_nodes
+    for i in range(n_nodes):
+        if not touching[i]:
+            continue
+        capacity = 0.0
+        weighted = 0.0
+        for f in range(fields):
+            e = f * n_nodes + i
+            if heat[e, 0] > cutoff:
+                capacity += heat[e, 0]
+                weighted += heat[e, 0] * T_grid[e]
+        if capacity > 0.0:
+            mean = weighted / capacity
+            for f in range(fields):
+                e = f * n_nodes + i
+                if heat[e, 0] > cutoff:
+                    T_grid[e] = mean
+
+
+@njit(cache=True)
+def deposit_heat(heat, touching, n_nodes, cutoff, added, T_new):
+    """T~_I += Q_I / C_I for the heat `added` at the nodes this step (frictional work, J), then
+    added = 0. Where the bodies touch (`touching`, empty: nowhere) the node's heat, whichever
+    field it was counted in, goes into the common temperature of its fields with capacity;
+    elsewhere into its own field. Returns the heat that found no capacity (J)."""
+    fields = heat.shape[0] // n_nodes
+    lost = 0.0
+    for i in range(n_nodes):
+        if touching.shape[0] > 0 and touching[i]:
+            capacity = 0.0
+            q = 0.0
+            for f in range(fields):
+                e = f * n_nodes + i
+                q += added[e]
+                added[e] = 0.0
+                if heat[e, 0] > cutoff:
+                    capacity += heat[e, 0]
+            if q == 0.0:
+                continue
+            if capacity > 0.0:
+                for f in range(fields):
+                    e = f * n_nodes + i
+                    if heat[e, 0] > cutoff:
+                        T_new[e] += q / capacity
+            else:
+                lost += q
+            continue
+        for f in range(fields):
+            e = f * n_nodes + i
+            if added[e] != 0.0:
+                if heat[e, 0] > cutoff:
+                    T_new[e] += added[e] / heat[e, 0]
+                else:
+                    lost += added[e]
+                added[e] = 0.0
+    return lost
 
 
 @njit(parallel=True, cache=True)
