@@ -63,6 +63,8 @@ def init_particles(scene, particles) -> None:
         particles.extra["heat_capacity"] = _per_particle(scene, particles.body, lambda m: m.specific_heat)
         particles.extra["conductivity"] = _per_particle(scene, particles.body, lambda m: m.thermal_conductivity)
         particles.require("heat_flux", (particles.dimension,))
+        if scene.method.formulation == "tlmpm":   # the nominal flux J F^-1 q of the reference configuration
+            particles.require("nominal_heat_flux", (particles.dimension,))
     if expands(scene):
         particles.extra["expansion_temperature"] = T.copy()   # T the stress last took in (rate models)
         particles.extra["start_temperature"] = T.copy()
@@ -192,6 +194,7 @@ class Conduction:
 
     def __init__(self, scene, particles):
         self.scene = scene
+        self.reference = scene.method.formulation == "tlmpm"   # Algorithm 8 on X_p, V0_p and Q_p
         p = particles
         mc = p.mass * p.extra["heat_capacity"]
         self.cutoff = CAPACITY_CUTOFF_FRACTION * float(mc[mc > 0].min()) if np.any(mc > 0) else 0.0
@@ -230,8 +233,9 @@ class Conduction:
         p, s = sim.particles, sim.stencil
         x = p.extra
         self.heat.fill(0.0)
-        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], p.volume,
-                            x["heat_flux"], self.heat, self.copies_heat)
+        volume, flux = (p.volume0, x["nominal_heat_flux"]) if self.reference else (p.volume, x["heat_flux"])
+        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], volume,
+                            flux, self.heat, self.copies_heat)
         sim.domain.sum_ghosts(self.heat)
 
     def before_update(self, sim, dt: float) -> None:
@@ -276,8 +280,12 @@ class Conduction:
             thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
         thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_new)
-        thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
-                                      sim.threads)
+        if self.reference:
+            thermal_kernels.reference_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], p.F,
+                                           x["heat_flux"], x["nominal_heat_flux"], sim.threads)
+        else:
+            thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
+                                          sim.threads)
 
     def grid_temperature(self) -> np.ndarray:
         """T_I^{t+dt} of the last step (the remapped, smooth one [R] plots), on this process's nodes."""

@@ -8,8 +8,10 @@ Q_I = sum_p V_p q_p . grad phi_I (+ the boundary terms the hook adds).
 """
 from __future__ import annotations
 
+import numpy as np
 from numba import njit, prange
 
+from solver import kernels
 from solver.threads import add_node_copies, block_bounds, own
 
 
@@ -224,6 +226,45 @@ def _flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, flux):
                 for n in range(nk):
                     g += dw[p, n, a] * T_grid[idx[p, n]]
             flux[p, a] = -k * g
+
+
+@njit(parallel=True, cache=True)
+def reference_flux(spec, idx, dw, T_grid, conductivity, F, flux, nominal, blocks):
+    """TLMPM (Algorithm 8 in the reference configuration): with grad0 T = sum_I grad0 phi_I(X_p)
+    T_I^{t+dt}, the spatial gradient is F^-T grad0 T; q_p = -k F^-T grad0 T (the output
+    heat_flux) and the nominal flux Q_p = J F^-1 q_p, whose sum V0_p Q_p . grad0 phi_I is the
+    same heat rate as sum V_p q_p . grad phi_I."""
+    dims, nodes = spec
+    bounds = block_bounds(dw.shape[0], blocks)
+    for t in prange(blocks):
+        _reference_flux_block(dims, nodes, bounds[t], bounds[t + 1], idx, dw, T_grid, conductivity, F, flux,
+                              nominal)
+
+
+@njit(cache=True)
+def _reference_flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, F, flux, nominal):
+    dim, nk = len(dims), len(nodes)
+    Finv = np.empty((dim, dim))
+    gradient = np.empty(dim)
+    for p in range(start, stop):
+        k = conductivity[p]
+        for a in range(dim):
+            g = 0.0
+            if k != 0.0:
+                for n in range(nk):
+                    g += dw[p, n, a] * T_grid[idx[p, n]]
+            gradient[a] = g
+        J = kernels.invert(F[p], Finv)
+        for a in range(dim):
+            g = 0.0
+            for b in range(dim):
+                g += Finv[b, a] * gradient[b]
+            flux[p, a] = -k * g
+        for a in range(dim):
+            Q = 0.0
+            for b in range(dim):
+                Q += Finv[a, b] * flux[p, b]
+            nominal[p, a] = J * Q
 
 
 @njit(parallel=True, cache=True)
