@@ -20,7 +20,16 @@ grad phi_I is the axisymmetric conduction operator, the radial term included.
 
 Conduction needs the stored stencil (the general backend: fused.supports refuses a
 conducting scene). Per-particle state lives in Particles.extra so that migration
-and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity.
+and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity (and
+in TLMPM nominal_heat_flux, J F^-1 q, which P2G takes with V0_p and grad0 phi_I(X_p)).
+
+Contact "friction" (solver/contact.py): the nodal thermal arrays hold every body's field,
+as the velocity arrays do, and the stencils point into them. Where the bodies touch (the
+contact's nodes) their fields are in perfect thermal contact: one C-weighted temperature,
+which keeps sum C T (thermal_kernels.share_temperature). The frictional work of contact and
+frictional walls (sim.friction_heat, counted with friction_work on v~^{t+dt}) is known
+only after the grid update, so with contact or friction the held temperatures and the halo of T_I^t,
+T~_I^{t+dt} move to after_g2p, after that heat is deposited (thermal_kernels.deposit_heat).
 """
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 stencil (idx, w, dw at x_p^t), threaded as solver/kernels.py is: scatters add each
 particle block into its own copy of the nodal arrays, gathers write their own rows.
 
-The nodal thermal array `heat` is (n_nodes, 3): the capacity C_I = sum_p phi_I m_p c_p,
+The nodal thermal array `heat` is (fields * n_nodes, 3) (contact "friction": a field per
+body, node I of field f at f * n_nodes + I): the capacity C_I = sum_p phi_I m_p c_p,
 the capacity-weighted temperature sum_p phi_I m_p c_p T_p, and the heat rate
 Q_I = sum_p V_p q_p . grad phi_I (+ the boundary terms the hook adds).
 """
