@@ -8,7 +8,6 @@ The cost of a contact step with conduction: `python benchmarks/contact_cost.py -
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -16,12 +15,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
 
 import heat_contact_cases as hcc  # noqa: E402
-
-
-def timed(function, *args, **kwargs):
-    start = time.perf_counter()
-    out = function(*args, **kwargs)
-    return out, time.perf_counter() - start
+from heat import timed  # noqa: E402   (benchmarks/heat.py)
 
 
 def main() -> None:

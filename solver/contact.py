@@ -276,8 +276,9 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
     material), pair_impulse[k, o] += (normal, tangential) impulse of field o on field k,
     totals[0] += the rigid fields' work (impulse . v_r), totals[1] += the friction's work on the
     remaining sliding, -m_k mu'D (|dv_t| - mu'D) <= 0, and heat[e] (fields * n_nodes, or empty
-    without conduction) += that work's heat at the node e of field k (solver/thermal.py). Serial: the nodes are independent but the
-    sums are shared, and the loop is a small part of the step.
+    without conduction) += that work's heat at the node e of field k (solver/thermal.py).
+    Serial: the nodes are independent but the sums are shared, and the loop is a small part
+    of the step.
     """
     fields = rigid.shape[0]
     dim = v.shape[1]

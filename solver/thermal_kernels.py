@@ -244,27 +244,22 @@ def reference_flux(spec, idx, dw, T_grid, conductivity, F, flux, nominal, blocks
 
 @njit(cache=True)
 def _reference_flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, F, flux, nominal):
-    dim, nk = len(dims), len(nodes)
+    dim = len(dims)
+    _flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, flux)   # -k grad0 T
     Finv = np.empty((dim, dim))
-    gradient = np.empty(dim)
+    q = np.empty(dim)
     for p in range(start, stop):
-        k = conductivity[p]
-        for a in range(dim):
-            g = 0.0
-            if k != 0.0:
-                for n in range(nk):
-                    g += dw[p, n, a] * T_grid[idx[p, n]]
-            gradient[a] = g
         J = kernels.invert(F[p], Finv)
-        for a in range(dim):
+        for a in range(dim):   # q = F^-T (-k grad0 T)
             g = 0.0
             for b in range(dim):
-                g += Finv[b, a] * gradient[b]
-            flux[p, a] = -k * g
+                g += Finv[b, a] * flux[p, b]
+            q[a] = g
         for a in range(dim):
             Q = 0.0
             for b in range(dim):
-                Q += Finv[a, b] * flux[p, b]
+                Q += Finv[a, b] * q[b]
+            flux[p, a] = q[a]
             nominal[p, a] = J * Q
 
 

@@ -47,8 +47,8 @@ CASES = {
     "heat-tlmpm": scene(TLMPM_2D, materials__rubber=HEAT_2D["materials"]["rubber"],
                         output__fields=HEAT_2D["output"]["fields"],
                         boundary_conditions=TLMPM_2D["boundary_conditions"] + [
-                            {"type": "temperature", "where": {"type": "box", "lower": [0.45, 0.1], "upper": [0.55, 0.14]},
-                             "temperature": "350 + 100 * t"},
+                            {"type": "temperature", "temperature": "350 + 100 * t",
+                             "where": {"type": "box", "lower": [0.45, 0.1], "upper": [0.55, 0.14]}},
                             {"type": "heat_flux", "face": "y-", "flux": "1e5 * t"}]),
     "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
 }
