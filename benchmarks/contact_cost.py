@@ -10,6 +10,10 @@ the scene steps it (the fused backend), the single field on the general backend 
 one contact uses), and `"contact": {"model": "friction", "friction": 0.3}`. The table
 gives each variant's median time per step and the ratios contact / single field; the
 spread is max/min - 1 of the repeats (the machine's noise at that moment).
+
+--heat adds a fourth variant, contact with conduction (the disks at 400 and 300 K,
+k = 1, c = 1000: solver/thermal.py's exchange at the contact nodes and the frictional
+heat), and its ratio to contact without heat.
 """
 from __future__ import annotations
 
@@ -23,8 +27,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def scene(scale: int, threads: int, contact: bool) -> dict:
+def scene(scale: int, threads: int, contact: bool, heat: bool = False) -> dict:
     s = json.loads((ROOT / "examples" / "two_disks.json").read_text())
+    if heat:
+        s["materials"]["elastic"].update(thermal_conductivity=1.0, specific_heat=1000.0)
+        for body, T in zip(s["bodies"], (400.0, 300.0)):
+            body["initial_temperature"] = T
     s["grid"]["cell_size"] /= scale
     s["time"]["dt"] /= scale
     s["parallel"] = {"threads": threads}
@@ -36,7 +44,7 @@ def scene(scale: int, threads: int, contact: bool) -> dict:
 def placed(variant: str, scale: int, threads: int):
     from solver.scene import load_scene
     from solver.stepper import ExplicitMPM
-    s = load_scene(scene(scale, threads, variant == "contact"))
+    s = load_scene(scene(scale, threads, variant.startswith("contact"), variant == "contact-heat"))
     sim = ExplicitMPM(s, general=variant != "fused")
     while sim.time < 1.55:   # the disks touch from 1.525 s
         sim.advance(s.time.dt)
@@ -61,8 +69,9 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--steps", type=int, default=200)
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--heat", action="store_true", help="also contact with conduction")
     args = parser.parse_args()
-    variants = ("fused", "general", "contact")
+    variants = ("fused", "general", "contact") + (("contact-heat",) if args.heat else ())
     sims = {v: placed(v, args.scale, args.threads) for v in variants}
     for v in variants:
         time_per_step(*sims[v], 10)   # warm
@@ -76,9 +85,11 @@ def main() -> None:
     median = {v: statistics.median(t) for v, t in times.items()}
     for v in variants:
         spread = max(times[v]) / min(times[v]) - 1
-        print(f"  {v:8s} {median[v] * 1e6:9.1f} us/step   spread {spread:5.1%}")
+        print(f"  {v:12s} {median[v] * 1e6:9.1f} us/step   spread {spread:5.1%}")
     print(f"  contact / single field (fused)   {median['contact'] / median['fused']:.2f}")
     print(f"  contact / single field (general) {median['contact'] / median['general']:.2f}")
+    if args.heat:
+        print(f"  contact with heat / contact      {median['contact-heat'] / median['contact']:.2f}")
 
 
 if __name__ == "__main__":

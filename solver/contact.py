@@ -248,8 +248,20 @@ def _touching(presence, fields, n_nodes, node, volume):
 
 
 @njit(cache=True)
+def mark_touching(presence, fields, n_nodes, node_volume, touching):
+    """touching[I] = whether node I is a contact node: more than one field has particles there
+    and they fill it (the test correct_fields applies). Where the heat crosses (solver/thermal.py)."""
+    for node in range(n_nodes):
+        present = 0
+        for f in range(fields):
+            if presence[f * n_nodes + node] > 0.0:
+                present += 1
+        touching[node] = present >= 2 and _touching(presence, fields, n_nodes, node, node_volume[node])
+
+
+@njit(cache=True)
 def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, friction, flat, record, owned,
-                   node_volume, impulse, pair_impulse, totals):
+                   node_volume, impulse, pair_impulse, totals, heat):
     """Contact at every node where more than one field has particles (see the module docstring).
 
     mass, presence (fields * n_nodes,: the volume each body gives a node), gradient, v
@@ -263,8 +275,10 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
     then overwritten by their owners' values): impulse[r] += m_k (v_k - v~_k) for a rigid field r (its action on the
     material), pair_impulse[k, o] += (normal, tangential) impulse of field o on field k,
     totals[0] += the rigid fields' work (impulse . v_r), totals[1] += the friction's work on the
-    remaining sliding, -m_k mu'D (|dv_t| - mu'D) <= 0. Serial: the nodes are independent but the
-    sums are shared, and the loop is a small part of the step.
+    remaining sliding, -m_k mu'D (|dv_t| - mu'D) <= 0, and heat[e] (fields * n_nodes, or empty
+    without conduction) += that work's heat at the node e of field k (solver/thermal.py).
+    Serial: the nodes are independent but the sums are shared, and the loop is a small part
+    of the step.
     """
     fields = rigid.shape[0]
     dim = v.shape[1]
@@ -316,15 +330,18 @@ def correct_fields(n_nodes, mass, presence, gradient, v, rigid, rigid_velocity, 
                 pair_impulse[k, partner, 0] += m * D
                 pair_impulse[k, partner, 1] += m * stop
                 totals[1] -= m * stop * (slide - stop)
+                if heat.shape[0] > 0:
+                    heat[e] += m * stop * (slide - stop)
             for a in range(dim):
                 v[e, a] = out[a]
 
 
 @njit(cache=True)
-def friction_wall(node, axis, sign, mu, v, grid_mass, dissipated):
+def friction_wall(node, axis, sign, mu, v, grid_mass, dissipated, heat):
     """Frictional walls at rest ([R] 5.1.5 with v_cm = 0 and the face's outward normal): a node
     moving into the wall loses that speed, and its sliding speed loses mu times it, at most
-    all. dissipated[0] += the friction's work on the remaining sliding (<= 0)."""
+    all. dissipated[0] += the friction's work on the remaining sliding (<= 0), and heat[I]
+    (empty without conduction) += that work's heat at the node."""
     dim = v.shape[1]
     n = np.zeros(dim)
     rest = np.zeros(dim)
@@ -336,6 +353,8 @@ def friction_wall(node, axis, sign, mu, v, grid_mass, dissipated):
         D, stop, slide = coulomb(v[I], rest, n, mu[i], out)
         if D > 0.0:
             dissipated[0] -= grid_mass[I] * stop * (slide - stop)
+            if heat.shape[0] > 0:
+                heat[I] += grid_mass[I] * stop * (slide - stop)
             for a in range(dim):
                 v[I, a] = out[a]
 
@@ -410,6 +429,12 @@ class FieldContact:
     def before_update(self, sim, dt: float) -> None:
         self._dt = dt
 
+    def touching(self, out: np.ndarray) -> np.ndarray:
+        """out[I] = whether the bodies touch at node I this step (after_weights has run), for the
+        heat exchange (solver/thermal.py)."""
+        mark_touching(self.presence, self.grid.fields, self.grid.n_nodes, self.node_volume, out)
+        return out
+
     def constrain(self, grid_mass, v, record: bool) -> float:
         """Correct v~_I^{t+dt} and MUSL's remapped velocity; v_I^t stays the bodies' own (FLIP adds
         v_I^{t+dt} - v_I^t to the particles; USF takes its strain rate from it, as [R] Algorithm 6)."""
@@ -418,8 +443,7 @@ class FieldContact:
         self.totals[:] = 0.0
         correct_fields(self.grid.n_nodes, grid_mass, self.presence, self.gradient, v, self.rigid,
                        self.sim.rigid.velocity, self.friction, self.flat, record, self.owned, self.node_volume,
-                       self.impulse,
-                       self.pair_impulse, self.totals)
+                       self.impulse, self.pair_impulse, self.totals, self.sim.friction_heat)
         if record:
             self.sim.friction_work += float(self.totals[1])
             self._elapsed += self._dt

@@ -63,7 +63,7 @@ from solver.schema import (
     supported,
     scene_error,
 )
-from solver.thermal_schema import conducts, thermal_problems
+from solver.thermal_schema import thermal_problems
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")
@@ -956,11 +956,9 @@ def _contact_problems(scene: Scene, names: dict[str, int]) -> list[tuple[str, st
 def _field_conflicts(scene: Scene) -> list[tuple[str, str]]:
     """Features whose grid arrays hold one field: they would read or write only the first
     body's field (or past the end of their arrays) under contact "friction"; the tracked
-    corners of cpdi_q4 and cpdi_tet4 move with one field's velocity."""
+    corners of cpdi_q4 and cpdi_tet4 move with one field's velocity. (Conduction holds every
+    field: solver/thermal.py.)"""
     problems = []
-    if conducts(scene):
-        problems.append(("contact.model", f"{scene.contact.model!r} is not supported yet with heat conduction "
-                                          "(the grid temperature is one field)"))
     for i, condition in enumerate(scene.boundary_conditions):
         if condition.type == "absorbing":
             problems.append((f"boundary_conditions[{i}].type", "absorbing faces are not supported yet with "

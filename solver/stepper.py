@@ -132,6 +132,10 @@ class ExplicitMPM:
         if self.axisymmetry is not None:
             self.axisymmetry.place(self.grid, self.domain.first_node(0))   # radii from whole-grid node layers
         self.copies = threads.ScatterCopies(self.grid.mass.shape[0], self.scene.dimension, self.threads)   # every field
+        # the frictional work's heat at each node and field this step (contact, frictional walls),
+        # which conduction puts into the temperature (solver/thermal.py); empty without conduction
+        heated = self.conduction is not None and energy.frictional(self.scene)
+        self.friction_heat = np.zeros(self.grid.mass.shape[0] if heated else 0)
         # APIC, MLS: PIC velocities plus the affine matrix C_p (solver/transfer.py)
         self.affine = affine_transfer(self.scene, self.particles, self.grid)
         self.hooks = step.scene_hooks(self)

@@ -20,7 +20,16 @@ grad phi_I is the axisymmetric conduction operator, the radial term included.
 
 Conduction needs the stored stencil (the general backend: fused.supports refuses a
 conducting scene). Per-particle state lives in Particles.extra so that migration
-and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity.
+and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity (and
+in TLMPM nominal_heat_flux, J F^-1 q, which P2G takes with V0_p and grad0 phi_I(X_p)).
+
+Contact "friction" (solver/contact.py): the nodal thermal arrays hold every body's field,
+as the velocity arrays do, and the stencils point into them. Where the bodies touch (the
+contact's nodes) their fields are in perfect thermal contact: one C-weighted temperature,
+which keeps sum C T (thermal_kernels.share_temperature). The frictional work of contact and
+frictional walls (sim.friction_heat, counted with friction_work on v~^{t+dt}) is known
+only after the grid update, so with contact or friction the held temperatures and the halo of T_I^t,
+T~_I^{t+dt} move to after_g2p, after that heat is deposited (thermal_kernels.deposit_heat).
 """
 from __future__ import annotations
 
@@ -63,6 +72,8 @@ def init_particles(scene, particles) -> None:
         particles.extra["heat_capacity"] = _per_particle(scene, particles.body, lambda m: m.specific_heat)
         particles.extra["conductivity"] = _per_particle(scene, particles.body, lambda m: m.thermal_conductivity)
         particles.require("heat_flux", (particles.dimension,))
+        if scene.method.formulation == "tlmpm":   # the nominal flux J F^-1 q of the reference configuration
+            particles.require("nominal_heat_flux", (particles.dimension,))
     if expands(scene):
         particles.extra["expansion_temperature"] = T.copy()   # T the stress last took in (rate models)
         particles.extra["start_temperature"] = T.copy()
@@ -192,17 +203,21 @@ class Conduction:
 
     def __init__(self, scene, particles):
         self.scene = scene
+        self.reference = scene.method.formulation == "tlmpm"   # Algorithm 8 on X_p, V0_p and Q_p
         p = particles
         mc = p.mass * p.extra["heat_capacity"]
         self.cutoff = CAPACITY_CUTOFF_FRACTION * float(mc[mc > 0].min()) if np.any(mc > 0) else 0.0
         self.boundary_heat = 0.0   # heat that entered through heat_flux and convection faces (J)
+        self.unheld_friction_heat = 0.0   # frictional heat on nodes without capacity (a body that holds none)
         whole = grid_geometry(scene)
         self._held_whole = held_temperatures(scene, whole)
         self._faces = FaceHeat(scene, whole)
 
     def place(self, sim) -> "Conduction":
-        """Nodal arrays for this process's grid; the conditions on the nodes it owns."""
-        n = sim.grid.n_nodes
+        """Nodal arrays for this process's grid (every field of it: contact has one per body);
+        the conditions on the nodes it owns."""
+        n = sim.grid.mass.shape[0]
+        self.n_nodes = sim.grid.n_nodes
         self.heat = np.zeros((n, 3))
         self.T_old, self.T_new, self.remapped = np.zeros(n), np.zeros(n), np.zeros(n)
         self.copies_heat = np.zeros((sim.threads - 1, n, 3))
@@ -210,6 +225,10 @@ class Conduction:
         self.held = sim.domain.owned(self._held_whole, sim.grid)
         self.faces = sim.domain.owned(self._faces.whole, sim.grid)
         self.T_now = self.held.value.copy()   # T* at t; held.value is T* at t + dt
+        # contact: the fields exchange heat where the bodies touch; friction heats them there
+        self.contact = getattr(sim, "field_contact", None)
+        self.touching = np.zeros(self.n_nodes if self.contact is not None else 0, dtype=np.bool_)
+        self.exchanges = self.contact is not None or sim.friction_heat.size > 0
         return self
 
     def begin_step(self, sim, t_end: float) -> None:
@@ -223,32 +242,59 @@ class Conduction:
         p, s = sim.particles, sim.stencil
         x = p.extra
         self.heat.fill(0.0)
-        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], p.volume,
-                            x["heat_flux"], self.heat, self.copies_heat)
+        volume, flux = (p.volume0, x["nominal_heat_flux"]) if self.reference else (p.volume, x["heat_flux"])
+        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], volume,
+                            flux, self.heat, self.copies_heat)
         sim.domain.sum_ghosts(self.heat)
 
     def before_update(self, sim, dt: float) -> None:
         faces = self._faces
         rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
-                                             faces.ambient, self.faces.axis, self.heat, self.cutoff)
+                                             faces.ambient, self.faces.axis, self.n_nodes, self.heat, self.cutoff)
         self.boundary_heat += dt * rate
         thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new)
-        thermal_kernels.hold(self.held.node, self.T_now, self.T_old)
-        thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
+        if not self.exchanges:   # (else once the step's frictional heat is known: after_g2p)
+            self._hold_and_share(sim)
+
+    def _hold_and_share(self, sim) -> None:
+        thermal_kernels.hold(self.held.node, self.T_now, self.n_nodes, self.T_old)
+        thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_old, self.T_new)
+
+    def _exchange(self, sim) -> None:
+        """Contact and frictional walls, before the particles take the grid's temperature change:
+        the touching fields share T_I^t and T~_I^{t+dt} (perfect thermal contact, each keeping
+        sum C T), and the frictional work of this step's velocity update (sim.friction_heat, on
+        the nodes this process owns) goes into T~ (solver/thermal_kernels.py)."""
+        if self.contact is not None:
+            self.contact.touching(self.touching)
+            thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_old)
+            thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
+        if sim.friction_heat.size:
+            self.unheld_friction_heat += thermal_kernels.deposit_heat(self.heat, self.touching, self.n_nodes,
+                                                                      self.cutoff, sim.friction_heat, self.T_new)
+        self._hold_and_share(sim)
 
     def after_g2p(self, sim, dt: float) -> None:
         p, s = sim.particles, sim.stencil
         x = p.extra
+        if self.exchanges:
+            self._exchange(sim)
         self.remapped.fill(0.0)
         thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
                                   x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
         thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new)
-        thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
+        if self.contact is not None:   # the flux at a contact node: from the touching fields' one temperature
+            thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
+        thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_new)
-        thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
-                                      sim.threads)
+        if self.reference:
+            thermal_kernels.reference_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], p.F,
+                                           x["heat_flux"], x["nominal_heat_flux"], sim.threads)
+        else:
+            thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
+                                          sim.threads)
 
     def grid_temperature(self) -> np.ndarray:
         """T_I^{t+dt} of the last step (the remapped, smooth one [R] plots), on this process's nodes."""

@@ -2,14 +2,17 @@
 stencil (idx, w, dw at x_p^t), threaded as solver/kernels.py is: scatters add each
 particle block into its own copy of the nodal arrays, gathers write their own rows.
 
-The nodal thermal array `heat` is (n_nodes, 3): the capacity C_I = sum_p phi_I m_p c_p,
+The nodal thermal array `heat` is (fields * n_nodes, 3) (contact "friction": a field per
+body, node I of field f at f * n_nodes + I): the capacity C_I = sum_p phi_I m_p c_p,
 the capacity-weighted temperature sum_p phi_I m_p c_p T_p, and the heat rate
 Q_I = sum_p V_p q_p . grad phi_I (+ the boundary terms the hook adds).
 """
 from __future__ import annotations
 
+import numpy as np
 from numba import njit, prange
 
+from solver import kernels
 from solver.threads import add_node_copies, block_bounds, own
 
 
@@ -64,25 +67,106 @@ def integrate(dt, heat, cutoff, T_old, T_new):
 
 
 @njit(cache=True)
-def boundary_heat(node, area, flux, coefficient, ambient, which, heat, cutoff):
+def boundary_heat(node, area, flux, coefficient, ambient, which, n_nodes, heat, cutoff):
     """Q_I += A_I (q* + h (T_amb - T_I^t)) on the faces' nodes that have capacity, with
-    T_I^t = (C T)_I / C_I; returns the heat rate that entered (W)."""
+    T_I^t = (C T)_I / C_I over the node's fields (contact: one per body) that have capacity,
+    each field taking its share C_f / C_I of the rate; returns the heat rate that entered (W).
+    With one field the share is C / C = 1 exactly: the same bits as a field-free sum."""
+    fields = heat.shape[0] // n_nodes
     total = 0.0
     for j in range(node.shape[0]):
         i = node[j]
-        if heat[i, 0] > cutoff:
+        capacity = 0.0
+        weighted = 0.0
+        for f in range(fields):
+            e = f * n_nodes + i
+            if heat[e, 0] > cutoff:
+                capacity += heat[e, 0]
+                weighted += heat[e, 1]
+        if capacity > 0.0:
             c = which[j]
-            rate = area[j] * (flux[c] + coefficient[c] * (ambient[c] - heat[i, 1] / heat[i, 0]))
-            heat[i, 2] += rate
+            rate = area[j] * (flux[c] + coefficient[c] * (ambient[c] - weighted / capacity))
+            for f in range(fields):
+                e = f * n_nodes + i
+                if heat[e, 0] > cutoff:
+                    heat[e, 2] += rate * (heat[e, 0] / capacity)
             total += rate
     return total
 
 
 @njit(cache=True)
-def hold(node, value, T_grid):
-    """Dirichlet nodes: T_I = T* (Algorithm 8, lines 10 and 14)."""
-    for j in range(node.shape[0]):
-        T_grid[node[j]] = value[j]
+def hold(node, value, n_nodes, T_grid):
+    """Dirichlet nodes: T_I = T* (Algorithm 8, lines 10 and 14), in every field."""
+    for f in range(T_grid.shape[0] // n_nodes):
+        for j in range(node.shape[0]):
+            T_grid[f * n_nodes + node[j]] = value[j]
+
+
+# Contact with a field per body (solver/contact.py): perfect thermal contact. At a node
+# where the bodies touch, the fields that hold heat there are one thermal field: each
+# takes the capacity-weighted mean sum_f C_f T_f / sum_f C_f, which keeps sum_f C_f T_f,
+# so the heat the particles take, sum_I C_I (T~_I - T_I), is unchanged by the exchange.
+# Two bodies that stay in contact conduct as the single field conducts them.
+
+@njit(cache=True)
+def share_temperature(heat, touching, n_nodes, cutoff, T_grid):
+    """At the nodes `touching` marks, the fields with capacity take their C-weighted mean T."""
+    fields = heat.shape[0] // n_nodes
+    for i in range(n_nodes):
+        if not touching[i]:
+            continue
+        capacity = 0.0
+        weighted = 0.0
+        for f in range(fields):
+            e = f * n_nodes + i
+            if heat[e, 0] > cutoff:
+                capacity += heat[e, 0]
+                weighted += heat[e, 0] * T_grid[e]
+        if capacity > 0.0:
+            mean = weighted / capacity
+            for f in range(fields):
+                e = f * n_nodes + i
+                if heat[e, 0] > cutoff:
+                    T_grid[e] = mean
+
+
+@njit(cache=True)
+def deposit_heat(heat, touching, n_nodes, cutoff, added, T_new):
+    """T~_I += Q_I / C_I for the heat `added` at the nodes this step (frictional work, J), then
+    added = 0. Where the bodies touch (`touching`, empty: nowhere) the node's heat, whichever
+    field it was counted in, goes into the common temperature of its fields with capacity;
+    elsewhere into its own field. Returns the heat that found no capacity (J)."""
+    fields = heat.shape[0] // n_nodes
+    lost = 0.0
+    for i in range(n_nodes):
+        if touching.shape[0] > 0 and touching[i]:
+            capacity = 0.0
+            q = 0.0
+            for f in range(fields):
+                e = f * n_nodes + i
+                q += added[e]
+                added[e] = 0.0
+                if heat[e, 0] > cutoff:
+                    capacity += heat[e, 0]
+            if q == 0.0:
+                continue
+            if capacity > 0.0:
+                for f in range(fields):
+                    e = f * n_nodes + i
+                    if heat[e, 0] > cutoff:
+                        T_new[e] += q / capacity
+            else:
+                lost += q
+            continue
+        for f in range(fields):
+            e = f * n_nodes + i
+            if added[e] != 0.0:
+                if heat[e, 0] > cutoff:
+                    T_new[e] += added[e] / heat[e, 0]
+                else:
+                    lost += added[e]
+                added[e] = 0.0
+    return lost
 
 
 @njit(parallel=True, cache=True)
@@ -143,6 +227,40 @@ def _flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, flux):
                 for n in range(nk):
                     g += dw[p, n, a] * T_grid[idx[p, n]]
             flux[p, a] = -k * g
+
+
+@njit(parallel=True, cache=True)
+def reference_flux(spec, idx, dw, T_grid, conductivity, F, flux, nominal, blocks):
+    """TLMPM (Algorithm 8 in the reference configuration): with grad0 T = sum_I grad0 phi_I(X_p)
+    T_I^{t+dt}, the spatial gradient is F^-T grad0 T; q_p = -k F^-T grad0 T (the output
+    heat_flux) and the nominal flux Q_p = J F^-1 q_p, whose sum V0_p Q_p . grad0 phi_I is the
+    same heat rate as sum V_p q_p . grad phi_I."""
+    dims, nodes = spec
+    bounds = block_bounds(dw.shape[0], blocks)
+    for t in prange(blocks):
+        _reference_flux_block(dims, nodes, bounds[t], bounds[t + 1], idx, dw, T_grid, conductivity, F, flux,
+                              nominal)
+
+
+@njit(cache=True)
+def _reference_flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, F, flux, nominal):
+    dim = len(dims)
+    _flux_block(dims, nodes, start, stop, idx, dw, T_grid, conductivity, flux)   # -k grad0 T
+    Finv = np.empty((dim, dim))
+    q = np.empty(dim)
+    for p in range(start, stop):
+        J = kernels.invert(F[p], Finv)
+        for a in range(dim):   # q = F^-T (-k grad0 T)
+            g = 0.0
+            for b in range(dim):
+                g += Finv[b, a] * flux[p, b]
+            q[a] = g
+        for a in range(dim):
+            Q = 0.0
+            for b in range(dim):
+                Q += Finv[a, b] * q[b]
+            flux[p, a] = q[a]
+            nominal[p, a] = J * Q
 
 
 @njit(parallel=True, cache=True)

@@ -56,9 +56,6 @@ def thermal_problems(scene, condition_classes, length_ok) -> list[tuple[str, str
         if material.thermal_expansion and not isinstance(material, ElasticMaterial):
             problems.append((f"{path}.thermal_expansion", f"is not supported yet for model {material.model!r} "
                                                           "(the solid models only)"))
-        if material.conducts and scene.method.formulation == "tlmpm":
-            problems.append((f"{path}.thermal_conductivity", "conduction is not supported yet with formulation "
-                                                             "'tlmpm' (it is written for ulmpm)"))
     heated = conducts(scene)
     for i, condition in enumerate(scene.boundary_conditions):
         if not isinstance(condition, condition_classes):

@@ -96,10 +96,12 @@ class GridConditions:
         work = 0.0
         walls = c.friction_node.size > 0 and v is not g.v_old
         self._dissipated[0] = 0.0
-        for mass_f, v_f in zip(g.field_views(grid_mass), g.field_views(v)):
+        heat = self.sim.friction_heat   # (empty without conduction)
+        heat_views = g.field_views(heat) if heat.size else [heat] * g.fields
+        for mass_f, v_f, heat_f in zip(g.field_views(grid_mass), g.field_views(v), heat_views):
             if walls:
                 contact.friction_wall(c.friction_node, c.friction_axis, c.friction_sign, c.friction_mu, v_f, mass_f,
-                                      self._dissipated)
+                                      self._dissipated, heat_f if record else heat_f[:0])
             if counted:
                 self.reactions.record(c, mass_f, v_f)
             work += kernels.apply_dirichlet(c.node, c.axis, c.value, mass_f, v_f)
@@ -135,7 +137,8 @@ def _rigid_bodies(sim):
 
 
 def _field_contact(sim):
-    return contact.FieldContact(sim) if sim.scene.contact.fields else None
+    sim.field_contact = contact.FieldContact(sim) if sim.scene.contact.fields else None   # (conduction reads it)
+    return sim.field_contact
 
 
 def _grid_conditions(sim):

@@ -40,12 +40,23 @@ CASES = {
     "contact": scene(SCENE_2D, contact={"model": "friction", "friction": 0.3},
                      boundary_conditions=[{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.2}]),
     "contact-rigid": scene(RIGID_2D, contact={"model": "friction", "friction": 0.2}),
+    # heat with a field per body: the disks (400 and 300 K) meet across the slab cut at x = 0.5,
+    # exchange heat where they touch and are heated by their friction (solver/thermal.py)
+    "heat-contact": scene(HEAT_2D, contact={"model": "friction", "friction": 0.3}),
+    # conduction in TLMPM (the reference configuration): a held box across the slab cut, a flux in at y-
+    "heat-tlmpm": scene(TLMPM_2D, materials__rubber=HEAT_2D["materials"]["rubber"],
+                        output__fields=HEAT_2D["output"]["fields"],
+                        boundary_conditions=TLMPM_2D["boundary_conditions"] + [
+                            {"type": "temperature", "temperature": "350 + 100 * t",
+                             "where": {"type": "box", "lower": [0.45, 0.1], "upper": [0.55, 0.14]}},
+                            {"type": "heat_flux", "face": "y-", "flux": "1e5 * t"}]),
     "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
-        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2)]
+        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2),
+        ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2)]
 
 
 @pytest.fixture(scope="module")

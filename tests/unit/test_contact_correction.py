@@ -20,14 +20,15 @@ def random_nodes(rng, n, fields, dim, rigid=None):
     return mass, mass.copy() + is_rigid.repeat(n), v, gradient, is_rigid   # presence > 0 everywhere
 
 
-def correct(n, mass, presence, gradient, v, rigid, mu, record=True, rigid_velocity=None):
+def correct(n, mass, presence, gradient, v, rigid, mu, record=True, rigid_velocity=None, heat=None):
     fields, dim = rigid.shape[0], v.shape[1]
+    heat = np.zeros(0) if heat is None else heat
     impulse = np.zeros((fields, dim))
     pairs = np.zeros((fields, fields, 2))
     totals = np.zeros(2)
     velocity = np.zeros((fields, dim)) if rigid_velocity is None else rigid_velocity
     contact.correct_fields(n, mass, presence, gradient, v, rigid, velocity, np.full((fields, fields), mu), 1e-9, record,
-                           np.ones(n, dtype=np.bool_), np.zeros(n), impulse, pairs, totals)   # (volume 0: bodies touch)
+                           np.ones(n, dtype=np.bool_), np.zeros(n), impulse, pairs, totals, heat)   # (volume 0: touch)
     return impulse, pairs, totals
 
 
@@ -107,10 +108,25 @@ def test_friction_wall_stops_the_approach_and_limits_the_sliding():
     v = np.array([[1.0, -0.5], [1.0, 0.5], [0.1, -0.5]])    # into the wall y-, away, into with little sliding
     mass = np.ones(3)
     dissipated = np.zeros(1)
+    heat = np.zeros(3)
     contact.friction_wall(np.arange(3), np.ones(3, dtype=np.int64), -np.ones(3), np.full(3, 0.4), v, mass,
-                          dissipated)
+                          dissipated, heat)
     np.testing.assert_allclose(v, [[1.0 - 0.4 * 0.5, 0.0], [1.0, 0.5], [0.0, 0.0]])
     assert dissipated[0] == pytest.approx(-(0.2 * 0.8))   # -m mu'D (slide - mu'D) of the sliding node
+    assert heat.tolist() == [-dissipated[0], 0.0, 0.0]   # its heat, at its node (solver/thermal.py)
+
+
+@pytest.mark.parametrize("rigid", [None, 1])
+def test_the_frictional_heat_of_each_node_sums_to_the_frictional_work(rigid):
+    rng = np.random.default_rng(11)
+    n = 300
+    mass, presence, v, gradient, is_rigid = random_nodes(rng, n, 2, 2, rigid)
+    heat = np.zeros(2 * n)
+    _, _, totals = correct(n, mass, presence, gradient, v, is_rigid, 0.3, heat=heat)
+    assert totals[1] < 0 and np.all(heat >= 0)
+    assert heat.sum() == pytest.approx(-totals[1], rel=1e-12)
+    if rigid is not None:   # a rigid field holds no heat: all of it is the deformable body's
+        assert not heat[n:].any()
 
 
 # -- the scene -------------------------------------------------------------------------
@@ -186,9 +202,8 @@ def test_density_normals_with_processes_are_refused():
 
 
 def test_one_field_features_are_refused_with_a_field_per_body():
-    """Conduction, absorbing faces, cpdi_q4 and cpdi_tet4 keep one grid field: refused, each at its path."""
-    conducting = {"m": {**BASE["materials"]["m"], "thermal_conductivity": 1.0, "specific_heat": 1.0}}
-    assert "heat conduction" in problems({"model": "friction"}, materials=conducting)["contact.model"]
+    """Absorbing faces, cpdi_q4 and cpdi_tet4 keep one grid field: refused, each at its path
+    (conduction holds every field: tests/verification/test_heat_contact.py)."""
     scene = copy.deepcopy(BASE)
     scene["contact"] = {"model": "friction"}
     scene["boundary_conditions"] = [{"type": "absorbing", "face": "x+"}]
@@ -206,5 +221,6 @@ def test_one_field_features_are_refused_with_a_field_per_body():
     with pytest.raises(SceneError) as error:
         load_scene(tetrahedra)
     assert "with contact 'friction'" in {e["path"]: e["message"] for e in error.value.errors}["method.shape_function"]
-    load_scene({**BASE, "materials": conducting})   # each is fine with the single field
+    conducting = {"m": {**BASE["materials"]["m"], "thermal_conductivity": 1.0, "specific_heat": 1.0}}
+    load_scene({**BASE, "contact": {"model": "friction"}, "materials": conducting})   # conduction: every field
     load_scene({**BASE, "method": {"shape_function": "cpdi_q4"}})

@@ -58,10 +58,8 @@ class TestValidation:
         paths = [e["path"] for e in errors_of(data)]
         assert "materials.bar.thermal_conductivity" in paths
 
-    def test_conduction_is_refused_with_tlmpm(self):
-        data = scene(method={"formulation": "tlmpm"})
-        [error] = [e for e in errors_of(data) if e["path"] == "materials.bar.thermal_conductivity"]
-        assert "tlmpm" in error["message"]
+    def test_conduction_runs_with_tlmpm(self):   # (tests/verification/test_heat.py, TestE12BarTLMPM)
+        assert load_scene(scene(method={"formulation": "tlmpm"})).method.formulation == "tlmpm"
 
     def test_expansion_is_for_the_solid_models(self):
         fluid = {"model": "fluid", "density": 1.0, "bulk_modulus": 1.0, "thermal_expansion": 1e-3}
@@ -231,3 +229,46 @@ def test_johnson_cook_softens_with_the_conducted_temperature():
     assert flowing.sum() >= 10   # the others unload in the reflected waves
     assert np.allclose(von_mises[flowing], flow_stress[flowing], rtol=1e-9, atol=0)
     assert np.all(von_mises <= flow_stress * (1 + 1e-9))
+
+
+class TestContactExchange:
+    """The heat exchange of contact "friction" node by node (solver/thermal_kernels.py): where
+    the bodies touch, their fields take one C-weighted temperature and the deposited
+    frictional heat, and sum_f C_f T_f changes by exactly that heat (round-off)."""
+
+    def nodes(self, rng, n=400, fields=3):
+        heat = np.zeros((fields * n, 3))
+        heat[:, 0] = rng.uniform(0.0, 2.0, fields * n) * (rng.uniform(size=fields * n) > 0.2)   # some hold none
+        touching = rng.uniform(size=n) > 0.5
+        return heat, touching, rng.uniform(250.0, 450.0, fields * n), n
+
+    def test_sharing_keeps_the_heat_and_gives_one_temperature_at_touching_nodes(self):
+        from solver import thermal_kernels
+        heat, touching, T, n = self.nodes(np.random.default_rng(5))
+        before = heat[:, 0] * T
+        shared = T.copy()
+        thermal_kernels.share_temperature(heat, touching, n, 1e-12, shared)
+        held = (heat[:, 0] > 1e-12).reshape(-1, n)
+        after = heat[:, 0] * shared
+        assert abs(after.sum() - before.sum()) <= 1e-13 * before.sum()
+        per_node = (after - before).reshape(-1, n).sum(axis=0)
+        assert np.abs(per_node).max() <= 1e-13 * np.abs(before).max()   # kept node by node
+        grid = shared.reshape(-1, n)
+        for i in np.flatnonzero(touching & (held.sum(axis=0) > 1)):
+            values = grid[held[:, i], i]
+            assert np.ptp(values) <= 1e-12 * values.max()
+        untouched = ~touching[None, :] | ~held
+        assert np.array_equal(grid[untouched], T.reshape(-1, n)[untouched])   # elsewhere as it was
+
+    def test_deposited_friction_heat_enters_the_thermal_energy_exactly(self):
+        from solver import thermal_kernels
+        rng = np.random.default_rng(6)
+        heat, touching, T, n = self.nodes(rng)
+        added = rng.uniform(0.0, 1e-3, T.size)
+        total = added.sum()
+        new = T.copy()
+        lost = thermal_kernels.deposit_heat(heat, touching, n, 1e-12, added, new)
+        assert not added.any()   # taken
+        gain = float(np.sum(heat[:, 0] * (new - T)))
+        assert lost > 0.0   # (nodes without capacity: a body that holds no heat)
+        assert gain + lost == pytest.approx(total, rel=1e-12)

@@ -42,6 +42,33 @@ class TestE12Bar:
         assert grid < particles < 5e-2
 
 
+class TestE12BarTLMPM:
+    """Conduction in TLMPM ([R] Algorithm 8 on the reference configuration: V0_p, grad0 phi_I(X_p),
+    the nominal flux Q_p = J F^-1 q_p). Undeformed, E12 as ULMPM: second order, below 1e-2 on 100
+    cells. Held stretched (F = 2 I), the bar conducts with k / 2 in X (heat_cases.bar_errors):
+    the J C^-1 of the flux is checked, with the undeformed errors' bound (the same grid, a slower
+    diffusion: the error at t is at most the unstretched one's at t / 2 ... t)."""
+
+    def test_e12_converges_at_second_order_as_ulmpm(self):
+        coarse = hc.bar_errors(50, dt=0.5 * 0.02**2 / 2, formulation="tlmpm")
+        fine = hc.bar_errors(100, dt=0.5 * 0.01**2 / 2, formulation="tlmpm")
+        ulmpm = hc.bar_errors(100, dt=0.5 * 0.01**2 / 2)
+        for t in (0.0075, 0.03, 0.05):
+            assert fine[t][0] < 1e-2
+            assert math.log2(coarse[t][0] / fine[t][0]) > 1.8
+            assert fine[t][0] == pytest.approx(ulmpm[t][0], rel=1e-9)   # F = I: the same scheme
+
+    def test_a_stretched_bar_conducts_with_the_reference_flux(self):
+        stretched = hc.bar_errors(100, dt=0.5 * 0.01**2 / 2, times=(0.015, 0.06, 0.1), formulation="tlmpm",
+                                  stretch=2.0)
+        for t, (grid, _) in stretched.items():
+            assert grid < 1e-2, f"t = {t}: {grid:.3g}"
+        # without the 1 / lambda the bar would follow E12's T(X, t), far from T(X, t / 2)
+        wrong = np.max(np.abs(hc.bar_exact(np.linspace(0, 1, 101), 0.015) - hc.bar_exact(np.linspace(0, 1, 101),
+                                                                                        0.0075)))
+        assert wrong > 5 * stretched[0.015][0]
+
+
 class TestE13Plate:
     """[R] eq. 5.28 at t = 0.05, dt = 1e-4, 4 particles per cell. Second order in h: the
     10 x 10 grid's error divided by the 20 x 20 grid's must exceed 3 (order > 1.58;
