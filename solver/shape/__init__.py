@@ -67,6 +67,7 @@ def get(name: str) -> SimpleNamespace:
                  "evaluate": getattr(module, declared.evaluate, None), "failure": getattr(module, "failure", None),
                  "hook": getattr(module, declared.hook, None) if declared.hook else None}
     return SimpleNamespace(__name__=f"{module.__name__}:{name}", SUPPORT=declared.support,
+                           COMPACT_SUPPORT=declared.compact_support,
                            **{key: f for key, f in functions.items() if f is not None})
 
 
