@@ -3,13 +3,15 @@
     python benchmarks/cook.py            # MPM with and without F-bar, h = 4, 2, 1 (minutes)
     python benchmarks/cook.py --fem      # the finite element cross-check of the reference only
 
-The scene and the corner measurement are those of tests/verification/test_fbar_cook.py.
+The scene, the measurement at the middle of the loaded edge (48, 52) and the published
+reference are those of tests/verification/test_fbar_cook.py.
 The cross-check (--fem): bilinear quadrilaterals (Q1) on an n x n mapped mesh of the
 panel with the volumetric (lambda) term integrated at one point and the rest at 2 x 2
 Gauss points (selective reduced integration, equivalent to the Q1-P0 mixed element,
 which does not lock at poisson_ratio -> 1/2), plane strain, the traction as consistent
-nodal forces, a dense solve; u_y at C for n = 8 ... 64 and the Richardson extrapolation
-of the last three (its observed order and limit).
+nodal forces, a dense solve; u_y at (48, 52) and at the corner C = (48, 60) for
+n = 8 ... 64 and the Richardson extrapolation of the last three (observed order and limit),
+with our data and with the published one's (Krysl: G = 0.375, lambda = 7500, load 1).
 """
 from __future__ import annotations
 
@@ -24,7 +26,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
 
-from test_fbar_cook import E, NU, REFERENCE, TRACTION, run_cook  # noqa: E402
+from test_fbar_cook import (E, MID_EDGE, NU, PUBLISHED, PUBLISHED_LOAD, PUBLISHED_SHEAR_MODULUS,  # noqa: E402
+                            REFERENCE, TRACTION, run_cook)
 
 
 def _mesh(n: int):
@@ -53,9 +56,9 @@ def _element_stiffness(corners, lam, mu):
     return K
 
 
-def fem_corner(n: int) -> float:
-    """u_y at C = (48, 60) of Q1 with selective reduced integration on an n x n mesh."""
-    lam, mu = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
+def fem_displacements(n: int, lam: float, mu: float, traction: float) -> tuple[float, float]:
+    """u_y at (48, 52) and at C = (48, 60) of Q1 with selective reduced integration on an n x n
+    mesh (n even: a node at the middle of the loaded edge)."""
     nodes, elements, index = _mesh(n)
     size = 2 * len(nodes)
     K = np.zeros((size, size))
@@ -65,27 +68,32 @@ def fem_corner(n: int) -> float:
     f = np.zeros(size)
     edge = index[-1, :]                                  # x = 48, from y = 44 to 60
     for a, b in zip(edge[:-1], edge[1:]):
-        half = 0.5 * TRACTION * np.linalg.norm(nodes[b] - nodes[a])
+        half = 0.5 * traction * np.linalg.norm(nodes[b] - nodes[a])
         f[2 * a + 1] += half
         f[2 * b + 1] += half
     free = np.setdiff1d(np.arange(size), np.stack([2 * index[0, :], 2 * index[0, :] + 1]).ravel())
     u = np.zeros(size)
     u[free] = np.linalg.solve(K[np.ix_(free, free)], f[free])
-    return float(u[2 * index[-1, -1] + 1])
+    return float(u[2 * index[-1, n // 2] + 1]), float(u[2 * index[-1, -1] + 1])
 
 
 def fem_table(sizes=(8, 16, 32, 64)) -> None:
-    values = [fem_corner(n) for n in sizes]
-    for n, v in zip(sizes, values):
-        print(f"Q1-SRI n = {n:3d}: u_C = {v:.4f}")
-    a, b, c = values[-3:]
-    order = np.log2((b - a) / (c - b))
-    limit = c + (c - b) / (2 ** order - 1)
-    print(f"observed order {order:.2f}, Richardson limit {limit:.4f} (literature {REFERENCE})")
+    ours = (E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU)), TRACTION)
+    published = (7500.0, PUBLISHED_SHEAR_MODULUS, PUBLISHED_LOAD / 16)
+    for name, data, reference in (("ours", ours, REFERENCE), ("published data", published, PUBLISHED)):
+        values = np.array([fem_displacements(n, *data) for n in sizes])
+        for n, (mid, corner) in zip(sizes, values):
+            print(f"{name}: Q1-SRI n = {n:3d}: u_y(48, {MID_EDGE:g}) = {mid:.4f}, u_y(48, 60) = {corner:.4f}")
+        for column, where in ((0, f"(48, {MID_EDGE:g})"), (1, "(48, 60)")):
+            a, b, c = values[-3:, column]
+            order = np.log2((b - a) / (c - b))
+            limit = c + (c - b) / (2 ** order - 1)
+            print(f"{name} at {where}: observed order {order:.2f}, Richardson limit {limit:.4f}"
+                  + (f" (published, at (48, 52): {reference:.4f})" if column == 0 else ""))
 
 
 def mpm_table(cells=(4.0, 2.0, 1.0)) -> None:
-    print("| h | F-bar | u_C | error vs 16.44 | wall s |")
+    print(f"| h | F-bar | u_y(48, {MID_EDGE:g}) | error vs {REFERENCE:.4f} | wall s |")
     print("|---|---|---|---|---|")
     for h in cells:
         for fbar in (False, True):

@@ -32,7 +32,7 @@ def through_grid(sim, values: np.ndarray) -> np.ndarray:
     The weights are those of the particles' current positions."""
     p, g = sim.particles, sim.grid
     s = make_stencil(p.count, p.dimension, sim.shape.SUPPORT)
-    shape.evaluate(sim.shape, sim.spec, p.x, p, g, s)
+    shape.evaluate(sim.shape, sim.wide_spec, p.x, p, g, s)
     mw = p.mass[:, None] * s.w
     node_mass = np.bincount(s.idx.ravel(), mw.ravel(), minlength=g.n_nodes)
     node_sum = np.bincount(s.idx.ravel(), (mw * values[:, None]).ravel(), minlength=g.n_nodes)

@@ -106,7 +106,7 @@ class AppliedLoads:
         stencil = make_stencil(rows.size, self.dimension, sim.shape.SUPPORT)
         subset = SimpleNamespace(extra={k: np.ascontiguousarray(a[rows]) for k, a in p.extra.items()},
                                  F=np.ascontiguousarray(p.F[rows]))
-        sim.domain.weights(sim.shape, sim.spec, x, subset, sim.grid, stencil)   # (outside: the step reports it)
+        sim.domain.weights(sim.shape, sim.wide_spec, x, subset, sim.grid, stencil)   # (outside: the step reports it)
         np.add.at(sim.grid.force, stencil.idx, stencil.w[:, :, None] * self.force[:, None, :])
 
     def end_step(self, sim, dt: float) -> None:

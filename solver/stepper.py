@@ -59,7 +59,10 @@ class ExplicitMPM:
         self.conduction = thermal.Conduction(scene, self.particles) if conducts(scene) else None
         self.expansion = thermal.ThermalExpansion(scene, self._model_of) if expands(scene) else None
         self.shape = shape.get(method.shape_function)
-        self.spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
+        # CPDI starts on a compact stencil and widens it when a domain needs it (solver/step/general.py)
+        self.stencil_support = self.shape.COMPACT_SUPPORT or self.shape.SUPPORT
+        self.spec = kernels.stencil_spec(scene.dimension, self.stencil_support**scene.dimension)
+        self.wide_spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
         self.loads = BodyLoads(scene)
         self.applied_loads = AppliedLoads(scene, self.particles) if scene.loads else None   # as seeded

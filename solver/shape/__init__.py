@@ -17,8 +17,9 @@ contiguous blocks of particles run on as many threads (solver/threads.py; any
 count gives the same bits). It returns the index of the first particle outside
 the grid (or whose stencil would need a node beyond the grid), or -1. `spec` makes the dimension and stencil size
 compile-time constants (kernels.stencil_spec). Stencil node k has the per-axis
-offsets (k // SUPPORT**a) % SUPPORT from the particle's first node, axis 0
-fastest. Node numbers must be sum_a i_a * strides[a] with i_a the node's index
+offsets (k // S**a) % S from the particle's first node, axis 0 fastest, S the
+stencil's nodes per axis: SUPPORT, or COMPACT_SUPPORT (CPDI) while the run is on its
+compact stencil (the kernel tells them apart by the length of spec's node tuple). Node numbers must be sum_a i_a * strides[a] with i_a the node's index
 along axis a of the whole grid (lower, cells), and a particle in cell i may touch
 nodes i - (S-1)//2 ... i + ceil(S/2) only (S = SUPPORT): with several processes
 the kernel is called with the strides of a process's slab of the grid
@@ -67,6 +68,7 @@ def get(name: str) -> SimpleNamespace:
                  "evaluate": getattr(module, declared.evaluate, None), "failure": getattr(module, "failure", None),
                  "hook": getattr(module, declared.hook, None) if declared.hook else None}
     return SimpleNamespace(__name__=f"{module.__name__}:{name}", SUPPORT=declared.support,
+                           COMPACT_SUPPORT=declared.compact_support,
                            **{key: f for key, f in functions.items() if f is not None})
 
 

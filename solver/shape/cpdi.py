@@ -10,6 +10,9 @@ R4 = ShapeFunction(
         # at its corners. Four nodes per axis: the corners may reach one cell either side
         # of the particle's own (a domain up to 2h wide per axis).
         name="cpdi_r4", support=4, kernels="solver.shape.kernels.cpdi", least_cells=3,
+        # a domain within two cells per axis (most: h / particles_per_cell stretched less
+        # than 2x) touches 3 nodes per axis: the compact stencil, 27 nodes in 3D against 64
+        compact_support=3,
         # The domain follows the current F: weights evaluated once in the reference
         # configuration (tlmpm) would see the undeformed box, i.e. uGIMP without its
         # exact integral; use gimp there.

@@ -20,7 +20,7 @@ class GeneralPhases(Phases):
     def place_particles(self) -> None:
         sim = self.sim
         p = sim.particles
-        sim.stencil = make_stencil(p.count, p.dimension, sim.shape.SUPPORT)
+        sim.stencil = make_stencil(p.count, p.dimension, sim.stencil_support)
         sim.rate = None
         sim.formulation.place_particles(p)
         if sim.formulation.reference:
@@ -35,6 +35,9 @@ class GeneralPhases(Phases):
         p = sim.particles
         x = sim.formulation.positions(p)
         outside = sim.domain.weights(sim.shape, sim.spec, x, p, sim.grid, sim.stencil)   # this process's node numbers
+        if outside >= 0 and sim.stencil_support < sim.shape.SUPPORT:   # a domain (CPDI) outgrew the compact stencil
+            self._widen_stencil()
+            outside = sim.domain.weights(sim.shape, sim.spec, x, p, sim.grid, sim.stencil)
         if outside >= 0:
             told = shape.failure(sim.shape, x, p, sim.frame, outside)   # (whole-grid frame)
             if told is not None:
@@ -46,6 +49,15 @@ class GeneralPhases(Phases):
             sim.affine.gradients(sim.spec, sim.stencil, x, sim.threads)   # into each body's field
         for hook in sim.hooks.after_weights:
             hook(sim)
+
+    def _widen_stencil(self) -> None:
+        """The full stencil (SUPPORT nodes per axis) for the rest of the run. The compact one
+        held the same nonzero entries in the same order, so the results do not depend on when
+        this happens (bit for bit: the entries it leaves out only ever add zeros)."""
+        sim = self.sim
+        sim.stencil_support = sim.shape.SUPPORT
+        sim.spec = sim.wide_spec
+        sim.stencil = make_stencil(sim.particles.count, sim.particles.dimension, sim.stencil_support)
 
     # -- P2G ------------------------------------------------------------------
 

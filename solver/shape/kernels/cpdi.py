@@ -38,6 +38,7 @@ from solver.kernels import invert
 from solver.threads import block_bounds, first_of
 
 SUPPORT = 4
+COMPACT = 3   # the compact stencil's nodes per axis (solver/shape/registry.py: compact_support)
 CORNERS = "domain_corners"   # Particles.extra (n, 4, 2): cpdi_q4's tracked corners, counter-clockwise
 SQUARE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])   # x1..x4 of review eq. 3.34
 
@@ -102,8 +103,8 @@ def domain_corners(x, length, F) -> np.ndarray:
 def weights(spec, x, length, F, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """CPDI-R4: the domains carried by F (`length` the seeded box sides)."""
     dims, nodes = spec
-    if SUPPORT ** len(dims) != len(nodes):
-        raise ValueError("cpdi: the stencil is not 4 nodes per axis")
+    if SUPPORT ** len(dims) != len(nodes) and COMPACT ** len(dims) != len(nodes):
+        raise ValueError("cpdi: the stencil is not 4 (or 3) nodes per axis")
     bounds = block_bounds(x.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
@@ -122,6 +123,7 @@ def _carried_block(dims, nodes, start, stop, x, length, F, lower, inv_h, cells, 
     at = np.empty((corners, dim))   # the corners, in cells from the grid's lower end
     wf = np.full(corners, 1.0 / corners)
     gw = np.empty((corners, dim))   # the corners' gradient weights, per length
+    cell, frac = np.empty((corners, dim), dtype=np.int64), np.empty((corners, dim))   # _scatter's scratch
     for p in range(start, stop):
         if not _first_nodes(p, x, lower, inv_h, cells, base):
             return p
@@ -140,7 +142,7 @@ def _carried_block(dims, nodes, start, stop, x, length, F, lower, inv_h, cells, 
                     g += Rinv[b, a] * sign   # g_c = 2^-d R^-T s_c; R in cells: d/dx_a = inv_h[a] d/ds_a
                 at[c, a] = s
                 gw[c, a] = g * inv_h[a] / corners
-        if not _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
+        if not _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw, cell, frac):
             return p
     return -1
 
@@ -158,41 +160,51 @@ def _first_nodes(p, x, lower, inv_h, cells, base):
 
 
 @njit(cache=True)
-def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
-    """phi_I = sum_c wf_c N_I(x_c) and grad phi_I = sum_c gw_c N_I(x_c) on the stencil from
-    `base`, the corners `at` (in cells) moved onto the grid; False where a corner lies
-    outside the stencil's three cells per axis."""
+def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw, cell, frac):
+    """phi_I = sum_c wf_c N_I(x_c) and grad phi_I = sum_c gw_c N_I(x_c), the corners `at` (in
+    cells) moved onto the grid. On the wide stencil (4 nodes per axis from `base`): False where
+    a corner lies outside its three cells per axis. On the compact one (3 per axis, `nodes`
+    3^d long): the nodes of the two cells per axis from the corners' lowest, False where the
+    corners span three cells on an axis (the step then widens the stencil: COMPACT).
+    cell (2^d, d) int64, frac (2^d, d): scratch, allocated once per block by the caller."""
     corners, dim = at.shape
     nk = len(nodes)
-    first = np.empty(dim, dtype=np.int64)
-    w1 = np.empty((dim, 2))
+    span = COMPACT if nk == COMPACT ** dim else SUPPORT   # (a compile-time constant)
+    for c in range(corners):
+        for a in range(dim):   # the corner's cell and its position in it
+            s = min(max(at[c, a], 0.0), float(cells[a]))
+            i = min(int(s), cells[a] - 1)
+            cell[c, a] = i
+            frac[c, a] = s - i
+    if span == COMPACT:
+        for a in range(dim):
+            low = cell[0, a]
+            for c in range(1, corners):
+                low = min(low, cell[c, a])
+            base[a] = min(low, cells[a] - 2)
+    for c in range(corners):
+        for a in range(dim):
+            if cell[c, a] < base[a] or cell[c, a] > base[a] + span - 2:
+                return False
     for k in range(nk):
         w[p, k] = 0.0
         node = 0
         rest = k
         for a in range(dim):
             dw[p, k, a] = 0.0
-            node += (base[a] + rest % SUPPORT) * strides[a]
-            rest //= SUPPORT
+            node += (base[a] + rest % span) * strides[a]
+            rest //= span
         idx[p, k] = node
     for c in range(corners):
-        for a in range(dim):   # the corner's cell and its hat weights
-            s = min(max(at[c, a], 0.0), float(cells[a]))
-            i = min(int(s), cells[a] - 1)
-            if i < base[a] or i > base[a] + 2:
-                return False
-            first[a] = i - base[a]
-            w1[a, 1] = s - i
-            w1[a, 0] = 1.0 - w1[a, 1]
         for j in range(2 ** dim):   # the 2^d nodes of the corner's cell
             k = 0
             stride = 1
             N = 1.0
             for a in range(dim):
                 bit = (j >> a) & 1
-                k += (first[a] + bit) * stride
-                stride *= SUPPORT
-                N *= w1[a, bit]
+                k += (cell[c, a] - base[a] + bit) * stride
+                stride *= span
+                N *= frac[c, a] if bit else 1.0 - frac[c, a]
             w[p, k] += N * wf[c]
             for a in range(dim):
                 dw[p, k, a] += N * gw[c, a]
@@ -202,12 +214,12 @@ def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw):
 # --------------------------------------------------------------------------- CPDI-Q4
 
 @njit(cache=True)
-def _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
+def _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw, cell, frac):
     """_scatter with the tracked corners q (2^d, d) in cells from the grid's lower end (`at`)."""
     for c in range(q.shape[0]):
         for d in range(q.shape[1]):
             at[c, d] = (q[c, d] - lower[d]) * inv_h[d]
-    return _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw)
+    return _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw, cell, frac)
 
 
 @njit(parallel=True, cache=True)
@@ -217,8 +229,8 @@ def weights_tracked(spec, x, corners, lower, inv_h, cells, strides, idx, w, dw, 
     hexahedron of eight, as six tetrahedra (below)."""
     dims, nodes = spec
     dim = len(dims)
-    if SUPPORT ** dim != len(nodes) or corners.shape[1] != 2 ** dim or dim == 1:
-        raise ValueError("cpdi_q4 / cpdi_tet4: 2D / 3D, 4 nodes per axis, 2^d corners")
+    if (SUPPORT ** dim != len(nodes) and COMPACT ** dim != len(nodes)) or corners.shape[1] != 2 ** dim or dim == 1:
+        raise ValueError("cpdi_q4 / cpdi_tet4: 2D / 3D, 4 (or 3) nodes per axis, 2^d corners")
     bounds = block_bounds(x.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
@@ -234,6 +246,7 @@ def weights_tracked(spec, x, corners, lower, inv_h, cells, strides, idx, w, dw, 
 @njit(cache=True)
 def _tracked_block(nodes, start, stop, x, corners, lower, inv_h, cells, strides, idx, w, dw):
     base = np.empty(2, dtype=np.int64)
+    cell, frac = np.empty((4, 2), dtype=np.int64), np.empty((4, 2))   # _scatter's scratch
     at = np.empty((4, 2))
     wf = np.empty(4)
     gw = np.empty((4, 2))
@@ -253,7 +266,8 @@ def _tracked_block(nodes, start, stop, x, corners, lower, inv_h, cells, strides,
         gw[1, 0], gw[1, 1] = (y3 - y1) / (2 * V), (x1 - x3) / (2 * V)
         gw[2, 0], gw[2, 1] = (y4 - y2) / (2 * V), (x2 - x4) / (2 * V)
         gw[3, 0], gw[3, 1] = (y1 - y3) / (2 * V), (x3 - x1) / (2 * V)
-        if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
+        if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw, cell,
+                                frac):
             return p
     return -1
 
@@ -386,6 +400,7 @@ def tetrahedra_weights(q, tets, wf, gw, centroid, J, Jinv):
 @njit(cache=True)
 def _tetrahedra_block(nodes, start, stop, x, corners, lower, inv_h, cells, strides, idx, w, dw):
     base = np.empty(3, dtype=np.int64)
+    cell, frac = np.empty((8, 3), dtype=np.int64), np.empty((8, 3))   # _scatter's scratch
     at = np.empty((8, 3))
     wf = np.empty(8)
     gw = np.empty((8, 3))
@@ -397,7 +412,8 @@ def _tetrahedra_block(nodes, start, stop, x, corners, lower, inv_h, cells, strid
         q = corners[p]
         if not tetrahedra_weights(q, KUHN, wf, gw, centroid, J, Jinv) > 0.0:
             return p
-        if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw):
+        if not _scatter_corners(p, nodes, base, q, lower, inv_h, at, wf, gw, cells, strides, idx, w, dw, cell,
+                                frac):
             return p
     return -1
 
