@@ -63,10 +63,11 @@ def run(scene: dict, processes: int) -> dict:
         event = json.loads(done.stdout.strip().splitlines()[-1])
         x = read_frame(out / "result.h5", -1)["fields"]["position"]
     height = float(np.max(x[:, 1]) - np.min(x[:, 1]))
+    diameter = float(np.max(x[:, 0]) - np.min(x[:, 0]))       # the mushroom's, across x
     rate = event["particles"] * event["steps"] / event["wall_seconds"]
     return {"processes": processes, "particles": event["particles"], "steps": event["steps"],
             "time": event["time"], "wall_seconds": event["wall_seconds"], "rate_per_process": rate / processes,
-            "length_mm": 1e3 * height}
+            "length_mm": 1e3 * height, "diameter_mm": 1e3 * diameter}
 
 
 def main() -> int:
@@ -77,11 +78,12 @@ def main() -> int:
     scene = anchor_scene(1e-5 if args.quick else 8e-5)
     rows = [run(scene, 2), run(scene, 1)]
     print("| processes | particles | steps | simulated (us) | wall (s) | M particle-steps/s per process "
-          "| final length (mm) |")
-    print("|---|---|---|---|---|---|---|")
+          "| final length (mm) | final diameter (mm) |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['processes']} | {r['particles']:,} | {r['steps']:,} | {r['time'] * 1e6:.1f} | "
-              f"{r['wall_seconds']:.1f} | {r['rate_per_process'] / 1e6:.2f} | {r['length_mm']:.2f} |")
+              f"{r['wall_seconds']:.1f} | {r['rate_per_process'] / 1e6:.2f} | {r['length_mm']:.2f} | "
+              f"{r['diameter_mm']:.2f} |")
     print(f"\nload average during the run: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))

@@ -66,6 +66,30 @@ def block_scene(dim: int, cells: int, length: float = 1.0) -> dict:
 
 # -- the rank program --------------------------------------------------------------
 
+# The domain's methods that talk to the other processes, timed in the probe: the halo
+# exchanges, and the collectives (reductions, broadcasts, the migration's counts). Their
+# time includes waiting for the slower process.
+HALO = ("_exchange",)
+COLLECTIVE = ("_reduce", "any", "root_says", "stop_if_failed", "migrate")
+
+
+def time_calls(domain, names: tuple[str, ...]) -> list[float]:
+    """Wrap the domain's methods `names` so that their seconds add up in the returned one-element list."""
+    spent = [0.0]
+
+    def timed(method):
+        def call(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return method(*args, **kwargs)
+            finally:
+                spent[0] += time.perf_counter() - start
+        return call
+
+    for name in names:
+        setattr(domain, name, timed(getattr(domain, name)))
+    return spent
+
 
 def probe(scene_path: str, steps: int, warmup: int) -> None:
     from solver.scene import load_scene
@@ -75,10 +99,13 @@ def probe(scene_path: str, steps: int, warmup: int) -> None:
     sim = ExplicitMPM(scene)
     d = sim.domain
     comm = getattr(d, "comm", None)
+    halo_seconds = time_calls(d, HALO) if comm is not None else [0.0]
+    collective_seconds = time_calls(d, COLLECTIVE) if comm is not None else [0.0]
     for _ in range(warmup):
         sim.advance(scene.time.dt)
     if comm is not None:
         comm.Barrier()
+    halo_seconds[0] = collective_seconds[0] = 0.0
     bytes_before = getattr(d, "halo_bytes", 0)
     started = time.perf_counter()
     for _ in range(steps):
@@ -94,6 +121,8 @@ def probe(scene_path: str, steps: int, warmup: int) -> None:
     grid = sum(a.nbytes for a in (g.mass, g.momentum, g.force, g.v_old, g.v_new))
     messages = len(getattr(d, "_ghosts", [])) + len(getattr(d, "_lent", []))
     mine = {"particles": sim.particles.count, "halo_bytes_per_step": halo, "messages_per_exchange": messages,
+            "halo_seconds_per_step": halo_seconds[0] / steps,
+            "collective_seconds_per_step": collective_seconds[0] / steps,
             "particle_bytes": arrays, "stencil_bytes": stencil, "grid_bytes": grid, "grid_nodes": g.mass.size,
             "rss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
     everyone = comm.gather(mine, root=0) if comm is not None else [mine]
@@ -128,6 +157,10 @@ def strong_scaling(cells: int, steps: int) -> tuple[list[str], dict, dict]:
         per = " / ".join(f"{r['particles']:,}" for r in m["ranks"])
         rows.append(f"| {label} | {per} | {m['wall_per_step']:.4f} | {n / m['wall_per_step'] / 1e6:.2f} | "
                     f"{one['wall_per_step'] / m['wall_per_step']:.2f} |")
+    rows.append("")
+    rows.append("2 x 1, per process: time in the halo exchanges / in the collectives, per step: " + ", ".join(
+        f"{1e3 * r['halo_seconds_per_step']:.1f} / {1e3 * r['collective_seconds_per_step']:.1f} ms"
+        for r in two["ranks"]))
     return rows, one, two
 
 

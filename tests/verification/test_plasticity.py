@@ -172,6 +172,36 @@ def test_johnson_cook_flow_stress_at_rates_and_temperatures(rate, temperature):
     assert q == pytest.approx(jc_flow_stress(eps_p, rate, temperature), rel=1e-3)
 
 
+def test_johnson_cook_rate_return_is_the_root_to_round_off():
+    """The plastic increment d of the rate-dependent return solves
+    g(d) = q - 3G d - S (1 + C ln(d / r)) = 0 to round-off: g at the returned d,
+    evaluated in long double, is at most 2 eps q. The float64 nearest the root leaves
+    |g'| ulp(d) / 2 = (3G d + S C) eps / 2 < q eps / 2 (3G d = q - S at most, and C < 1),
+    so 2 eps q allows four times the best possible (the former stopping test,
+    |step| <= 1e-13 d, left up to 255 eps q on these draws). Starts inside the bracket,
+    above it and below it. Draws: copper-like moduli, S 1e8-1e9, rates over dt
+    1e-9-1e-7, q 1.001-3 S."""
+    from solver.materials.kernels.johnson_cook import plastic_increment
+    rng = np.random.default_rng(7)
+    three_g, C, rate0 = 3 * 46e9, 0.025, 1.0
+    checked = 0
+    for _ in range(3000):
+        S = 10 ** rng.uniform(8, 9)
+        r = rate0 * 10 ** rng.uniform(-9, -7)
+        q = S * rng.uniform(1.001, 3.0)
+        upper = (q - S) / three_g
+        guess = upper * 10 ** rng.uniform(-3, 0.3)        # inside, and sometimes outside, the bracket
+        d = plastic_increment(q, three_g, S, C, r, guess)
+        if upper <= r:
+            assert d == upper                              # no rate term at or below the reference rate
+            continue
+        x = np.longdouble(d)
+        g = np.longdouble(q) - three_g * x - S * (1 + C * np.log(x / np.longdouble(r)))
+        assert abs(g) <= 2 * np.finfo(float).eps * q
+        checked += 1
+    assert checked > 2500
+
+
 def test_johnson_cook_melted_material_carries_no_shear():
     point = MaterialPoint({**CU, "eos": MG}, 3, temperature=CU["melt_temperature"] + 10)
     L = np.zeros((3, 3))

@@ -43,7 +43,7 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, eta, eta_bar, xi_c,
     # scratch per block, in this serial function: never shared between threads
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
-        m = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)
+        m = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)   # inlined by numba
         j_trial = objective.von_mises(s) / math.sqrt(3.0)     # sqrt(J2)
         m, j, state[p] = return_map(m, j_trial, K, G, eta, eta_bar, xi_c, cutoff)
         if state[p] != ELASTIC:

@@ -68,15 +68,26 @@ def flow_stress(prm, eps_p, rate_ratio, t_star):
     return hardening * rate * thermal
 
 
+# Newton stops when its predicted next error is below this relative to the root: the
+# root's own round-off (the residual q - 3 G x cancels to about this times q).
+ROUND_OFF = 2.0 ** -52
+
+
 @njit(cache=True)
 def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor, guess):
     """d eps_p of the radial return with the strain-rate term taken at this step's rate:
 
-        q_trial - 3 G' d = sigma_static (1 + C ln(max(d / rate_floor, 1))),  rate_floor = eps_dot_0 dt,
+        g(d) = q_trial - 3 G' d - sigma_static (1 + C ln(max(d / rate_floor, 1))) = 0,
 
-    sigma_static the flow stress without its rate factor. The left side falls and
-    the right side rises with d, so the root is unique; safeguarded Newton finds it,
-    starting from `guess` (the last step's increment: in steady flow a step or two away).
+    rate_floor = eps_dot_0 dt, sigma_static the flow stress without its rate factor.
+    g falls with d, so the root is unique; safeguarded Newton finds it, starting from
+    `guess` (the last step's increment: in steady flow a step or two away).
+
+    Stopping: g is convex, g'' = sigma_static C / d^2, so a Newton step of size h from
+    x leaves an error of about h^2 |g''| / (2 |g'|) = (h / x)^2 x k / 2 with
+    k = (sigma_static C / x) / |g'(x)| < 1. Once (h / x)^2 k <= ROUND_OFF the next
+    iterate is the root to round-off: stop there instead of taking another step to
+    confirm it (a test on |h| alone, near round-off, costs 2-3 more logarithms).
     """
     d = (q_trial - sigma_static) / three_g           # the root without the rate term, an upper bound
     if C == 0.0 or d <= rate_floor:
@@ -85,16 +96,23 @@ def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor, guess):
     x = guess if lo < guess < hi else d
     for _ in range(60):
         g = q_trial - three_g * x - sigma_static * (1.0 + C * math.log(x / rate_floor))
+        if g == 0.0:                                 # an exact root (else it would become a bracket end)
+            return x
         if g > 0.0:
             lo = x
         else:
             hi = x
-        step = g / (three_g + sigma_static * C / x)
+        curvature = sigma_static * C / x             # x |g''(x)|
+        slope = three_g + curvature                  # |g'(x)|
+        step = g / slope
         nxt = x + step
-        if not lo < nxt < hi:
+        if lo < nxt < hi:
+            if step * step * curvature <= ROUND_OFF * x * x * slope:
+                return nxt
+        else:                                        # Newton left the bracket: bisect
             nxt = 0.5 * (lo + hi)
-        if abs(nxt - x) <= 1e-13 * x:
-            return nxt
+            if hi - lo <= ROUND_OFF * hi:
+                return nxt
         x = nxt
     return x
 

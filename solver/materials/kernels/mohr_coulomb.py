@@ -202,7 +202,7 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, c
     lam = K - 2.0 * G / 3.0
     two_c_cos = 2.0 * cohesion * math.sqrt(1.0 - sin_phi * sin_phi)
     for p in range(lo, hi):
-        m = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)
+        m = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)   # inlined by numba
         objective.assemble(s, -m, stress[p])
         state[p] = ELASTIC
         if not (may_yield(s, m, sin_phi, two_c_cos) or m > cutoff):

@@ -104,7 +104,9 @@ def assemble(s, p, sigma):
         sigma[a, a] -= p
 
 
-@njit(cache=True)
+# Inlined into the callers' particle loops (numba IR): as a call it made J2's update 1.36x
+# slower (docs/benchmarks.md, "Speed, third part").
+@njit(cache=True, inline="always")
 def trial_stress(Lp, sigma, dt, K, G, D, W, Q, tmp, s):
     """The elastic trial of a hypoelastic-plastic step: sigma rotated by the spin of Lp,
     its deviator s <- s + 2 G dt dev(D); returns the trial pressure p - K tr(D) dt
