@@ -190,7 +190,7 @@ def breakdown(dim: int, cells: int, repeats: int = 5) -> dict:
         reference.advance(MLS_DT)
     tiny = 1e-12   # phases timed on their own must not move the particles
     phases = {
-        "P2G (mass, momentum with APIC, force)": lambda: sim.phases.particles_to_grid(),
+        "P2G (mass, momentum with APIC, force)": lambda: sim.phases.particles_to_grid(MLS_DT),
         "grid update and boundary conditions": lambda: (kernels.integrate_nodes(
             tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new), sim.phases._constrain(g.v_new)),
         "G2P (v, C, x; L, F, V)": lambda: sim.phases.grid_to_particles(tiny, remap=False, kinematics=True),

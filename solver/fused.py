@@ -49,7 +49,7 @@ from numba import njit
 from solver import shape
 # which scenes the fused kernels run: decided without numba (the run-time estimates read it too)
 from solver.fused_scope import FUSED_SHAPES, supports  # noqa: F401
-from solver.threads import add_copies
+from solver.threads import add_copies, add_node_copies
 
 _TOUCH = 1e-9   # as solver/shape/quadratic_bspline.py: round-off allowance at h/2 from a grid end
 
@@ -110,3 +110,10 @@ def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_for
         add_copies(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
+
+@njit(cache=True)
+def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
+    """`_reduce` of a P2G that folded the force into the momentum (no force copies to add)."""
+    if copies_mass.shape[0] > 0:
+        add_node_copies(grid_mass, copies_mass)
+        add_node_copies(grid_mom, copies_mom)
