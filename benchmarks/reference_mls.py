@@ -24,6 +24,33 @@ def _bspline(s):
     return base, f, (0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2)
 
 
+@njit(cache=True, inline="always")
+def _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p):
+    """2D G2P of particle p: v_p and C_p from the grid's velocities (in grid_mom), x_p moved;
+    returns v_p and C_p (inlined: no call level in the particle loop)."""
+    bx, fx, wx = _bspline(x[p, 0] * inv_dx)
+    by, fy, wy = _bspline(x[p, 1] * inv_dx)
+    vx = vy = c00 = c01 = c10 = c11 = 0.0
+    for j in range(3):
+        dy = j - fy
+        row = (by + j) * nx
+        for i in range(3):
+            dxi = i - fx
+            w = wx[i] * wy[j]
+            gvx, gvy = grid_mom[row + bx + i, 0], grid_mom[row + bx + i, 1]
+            vx += w * gvx
+            vy += w * gvy
+            c00 += 4.0 * inv_dx * w * gvx * dxi
+            c01 += 4.0 * inv_dx * w * gvx * dy
+            c10 += 4.0 * inv_dx * w * gvy * dxi
+            c11 += 4.0 * inv_dx * w * gvy * dy
+    v[p, 0], v[p, 1] = vx, vy
+    C[p, 0, 0], C[p, 0, 1], C[p, 1, 0], C[p, 1, 1] = c00, c01, c10, c11
+    x[p, 0] += dt * vx
+    x[p, 1] += dt * vy
+    return vx, vy, c00, c01, c10, c11
+
+
 @njit(parallel=True, cache=True)
 def step_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, copies_mass, copies_mom):
     dx = 1.0 / inv_dx
@@ -71,26 +98,7 @@ def step_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom,
             grid_mom[node, 0] /= grid_mass[node]
             grid_mom[node, 1] /= grid_mass[node]
     for p in prange(n):
-        bx, fx, wx = _bspline(x[p, 0] * inv_dx)
-        by, fy, wy = _bspline(x[p, 1] * inv_dx)
-        vx = vy = c00 = c01 = c10 = c11 = 0.0
-        for j in range(3):
-            dy = j - fy
-            row = (by + j) * nx
-            for i in range(3):
-                dxi = i - fx
-                w = wx[i] * wy[j]
-                gvx, gvy = grid_mom[row + bx + i, 0], grid_mom[row + bx + i, 1]
-                vx += w * gvx
-                vy += w * gvy
-                c00 += 4.0 * inv_dx * w * gvx * dxi
-                c01 += 4.0 * inv_dx * w * gvx * dy
-                c10 += 4.0 * inv_dx * w * gvy * dxi
-                c11 += 4.0 * inv_dx * w * gvy * dy
-        v[p, 0], v[p, 1] = vx, vy
-        C[p, 0, 0], C[p, 0, 1], C[p, 1, 0], C[p, 1, 1] = c00, c01, c10, c11
-        x[p, 0] += dt * vx
-        x[p, 1] += dt * vy
+        vx, vy, c00, c01, c10, c11 = _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
         f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
         F[p, 0, 0] = f00 + dt * (c00 * f00 + c01 * f10)
         F[p, 0, 1] = f01 + dt * (c00 * f01 + c01 * f11)
@@ -271,26 +279,7 @@ def step_mpm88(dt, inv_dx, nx, gravity, bulk, bound, x, v, C, J, mass, vol, grid
             if (ij[a] < bound and grid_mom[node, a] < 0.0) or (ij[a] > last and grid_mom[node, a] > 0.0):
                 grid_mom[node, a] = 0.0
     for p in prange(n):
-        bx, fx, wx = _bspline(x[p, 0] * inv_dx)
-        by, fy, wy = _bspline(x[p, 1] * inv_dx)
-        vx = vy = c00 = c01 = c10 = c11 = 0.0
-        for j in range(3):
-            dy = j - fy
-            row = (by + j) * nx
-            for i in range(3):
-                dxi = i - fx
-                w = wx[i] * wy[j]
-                gvx, gvy = grid_mom[row + bx + i, 0], grid_mom[row + bx + i, 1]
-                vx += w * gvx
-                vy += w * gvy
-                c00 += 4.0 * inv_dx * w * gvx * dxi
-                c01 += 4.0 * inv_dx * w * gvx * dy
-                c10 += 4.0 * inv_dx * w * gvy * dxi
-                c11 += 4.0 * inv_dx * w * gvy * dy
-        v[p, 0], v[p, 1] = vx, vy
-        C[p, 0, 0], C[p, 0, 1], C[p, 1, 0], C[p, 1, 1] = c00, c01, c10, c11
-        x[p, 0] += dt * vx
-        x[p, 1] += dt * vy
+        vx, vy, c00, c01, c10, c11 = _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
         J[p] *= 1.0 + dt * (c00 + c11)
 
 

@@ -44,12 +44,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver import shape
 # which scenes the fused kernels run: decided without numba (the run-time estimates read it too)
 from solver.fused_scope import FUSED_SHAPES, supports  # noqa: F401
-from solver.threads import add_copies, add_node_copies
+from solver.threads import add_copies
 
 _TOUCH = 1e-9   # as solver/shape/quadratic_bspline.py: round-off allowance at h/2 from a grid end
 
@@ -115,5 +115,16 @@ def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_for
 def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
     """`_reduce` of a P2G that folded the force into the momentum (no force copies to add)."""
     if copies_mass.shape[0] > 0:
-        add_node_copies(grid_mass, copies_mass)
-        add_node_copies(grid_mom, copies_mom)
+        _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom)
+
+
+@njit(parallel=True, cache=True)
+def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
+    """As solver/threads.py's add_copies without the force: one parallel loop over the nodes
+    (two, one per array, were not faster)."""
+    n, dim = grid_mom.shape
+    for i in prange(n):
+        for t in range(copies_mass.shape[0]):
+            grid_mass[i] += copies_mass[t, i]
+            for a in range(dim):
+                grid_mom[i, a] += copies_mom[t, i, a]

@@ -9,12 +9,12 @@ K (J - 1) in the affine momentum, J a scalar, gravity, walls 3 nodes thick) in f
 on the particles the solver seeded (positions, masses, volumes from BLOCK.npz).
 """
 
-import json
 import sys
-import time
 
 import numpy as np
 import taichi as ti
+
+from timing import report_rate
 
 
 def main(path: str, threads: int, steps: int) -> None:
@@ -91,17 +91,7 @@ def main(path: str, threads: int, steps: int) -> None:
     J.from_numpy(np.ones(n))
     C.from_numpy(np.zeros((n, 2, 2)))
     dt = float(data["dt"])
-    for _ in range(3):          # compile
-        step(dt)
-    ti.sync()
-    best = 0.0
-    for _ in range(3):
-        start = time.perf_counter()
-        for _ in range(steps):
-            step(dt)
-        ti.sync()
-        best = max(best, n * steps / (time.perf_counter() - start))
-    print(json.dumps({"rate": best, "x_mean": float(x.to_numpy().mean())}))
+    report_rate(lambda: step(dt), ti.sync, n, steps, x.to_numpy)
 
 
 if __name__ == "__main__":

@@ -6,14 +6,13 @@ in NVIDIA Warp, on its CPU device.
 Run by benchmarks/throughput.py in its own process; Warp runs CPU kernels on one thread.
 Same arithmetic as the numba reference and mpm88_taichi.py, float64.
 """
-import json
 import sys
-import time
 
 import numpy as np
 import warp as wp
 
 from mls_warp import bspline
+from timing import report_rate
 
 f64 = wp.float64
 
@@ -109,17 +108,7 @@ def main(path: str, steps: int) -> None:
         wp.launch(grid, dim=shape, inputs=[grid_m, grid_v, dt, gravity, bound, cells], device=device)
         wp.launch(g2p, dim=n, inputs=[x, v, C, J, grid_v, dt, inv_dx], device=device)
 
-    for _ in range(3):           # compile
-        step()
-    wp.synchronize()
-    best = 0.0
-    for _ in range(3):
-        start = time.perf_counter()
-        for _ in range(steps):
-            step()
-        wp.synchronize()
-        best = max(best, n * steps / (time.perf_counter() - start))
-    print(json.dumps({"rate": best, "x_mean": float(x.numpy().mean())}))
+    report_rate(step, wp.synchronize, n, steps, x.numpy)
 
 
 if __name__ == "__main__":
