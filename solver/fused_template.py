@@ -29,6 +29,10 @@ Names in the emitted code: axis a has the letter c = "xyz"[a] and the loop index
 g{c} (weights and gradients on the S nodes), d{c} = (index - f{c}) h (node minus
 particle); per component v{c}, vp{c}, ...; per tensor entry s{a}{b}, l{a}{b}, ....
 
+With the compile-time `fold` (MLS, where nothing reads f_I: solver/step/fused.py
+`folds_force`), P2G scatters m_I and (mv)_I + dt f_I only: dt m_p b_p joins m_p v_p and
+dt V_p sigma_p D_p^-1 is taken from m_p C_p once per particle, as MLS-MPM codes do.
+
 What is CPU-specific is the thread shell (`_shell`: a prange over contiguous
 particle blocks, each scattering into its own copy of the nodal arrays, see
 solver/threads.py) and the scatter statements (`_scatter`). A CUDA backend would
