@@ -3,6 +3,7 @@
     for i in 1 2 3; do python benchmarks/throughput.py --frameworks-python PY --side-by-side-only \\
         --blocks 2:225:15 3:32:6 --json run_$i.json; done
     python benchmarks/mls_speed_plot.py run_*.json          # -> docs/images/mls_speed.png
+    python benchmarks/mls_speed_plot.py --image docs/images/mls_speed_third.png run_*.json
 
 Each run has the five implementations side by side (benchmarks/throughput.py);
 the table gives, per block and thread count, the median of the runs and their
@@ -19,10 +20,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 IMAGE = Path(__file__).resolve().parent.parent / "docs" / "images" / "mls_speed.png"
-RATES = (("solver", "solver APIC"), ("mls", "solver MLS"), ("numba", "numba MLS"), ("taichi", "Taichi"),
-         ("warp", "Warp (1 thread)"))
-RATIOS = (("mls", "solver", "MLS / APIC", None), ("mls", "numba", "MLS / numba", 0.9),
-          ("mls", "taichi", "MLS / Taichi", 2.0), ("mls", "warp", "MLS / Warp", 1.2))
+RATES = (("solver", "solver APIC"), ("mls", "solver MLS"), ("mls_unfolded", "MLS unfolded"), ("numba", "numba MLS"),
+         ("taichi", "Taichi"), ("warp", "Warp (1 thread)"))
+RATIOS = (("mls", "solver", "MLS / APIC", None), ("mls", "mls_unfolded", "MLS / unfolded", None),
+          ("mls", "numba", "MLS / numba", 0.9), ("mls", "taichi", "MLS / Taichi", 2.0),
+          ("mls", "warp", "MLS / Warp", 1.2))
 
 
 def spread(values: list[float], scale: float = 1.0, digits: int = 2) -> str:
@@ -30,22 +32,31 @@ def spread(values: list[float], scale: float = 1.0, digits: int = 2) -> str:
     return f"{np.median(v):.{digits}f} ({v.min():.{digits}f}-{v.max():.{digits}f})"
 
 
-def main(paths: list[str]) -> int:
-    runs = [json.loads(Path(p).read_text())["side_by_side"] for p in paths]
-    keys = [(r["dimension"], r["particles"], r["threads"]) for r in runs[0]]
-    rows = {k: [next(r for r in run if (r["dimension"], r["particles"], r["threads"]) == k) for run in runs]
-            for k in keys}
-    print("| block | threads | " + " | ".join(t for _, t in RATES) + " | " + " | ".join(t for *_, t, _ in RATIOS) + " |")
-    print("|---" * (2 + len(RATES) + len(RATIOS)) + "|")
-    for (dim, n, threads), rs in rows.items():
-        rates = [spread([r[k] for r in rs], 1e6) for k, _ in RATES]
-        ratios = [spread([r[a] / r[b] for r in rs]) for a, b, _, _ in RATIOS]
-        print(f"| {dim}D, {n:,} | {threads} | " + " | ".join(rates) + " | " + " | ".join(ratios) + " |")
+def _key(row: dict) -> tuple:
+    return row.get("case", f"{row['dimension']}D block"), row["particles"], row["threads"]
+
+
+def main(args: list[str]) -> int:
+    image = IMAGE
+    if args[:1] == ["--image"]:
+        image, args = Path(args[1]), args[2:]
+    runs = [json.loads(Path(p).read_text())["side_by_side"] for p in args]
+    rates_of = [(k, title) for k, title in RATES if all(k in r for run in runs for r in run)]   # older runs: no unfolded
+    ratios_of = [r for r in RATIOS if all(r[0] in x and r[1] in x for run in runs for x in run)]
+    rows = {_key(r): [next(x for x in run if _key(x) == _key(r)) for run in runs] for r in runs[0]}
+    print("| case | threads | " + " | ".join(t for _, t in rates_of) + " | " + " | ".join(t for *_, t, _ in ratios_of)
+          + " |")
+    print("|---" * (2 + len(rates_of) + len(ratios_of)) + "|")
+    for (case, n, threads), rs in rows.items():
+        rates = [spread([r[k] for r in rs], 1e6) for k, _ in rates_of]
+        ratios = [spread([r[a] / r[b] for r in rs]) for a, b, _, _ in ratios_of]
+        print(f"| {case}, {n:,} | {threads} | " + " | ".join(rates) + " | " + " | ".join(ratios) + " |")
+    goals = [r for r in ratios_of if r[3] is not None]
     figure = Figure(figsize=(10, 4.2))
     FigureCanvasAgg(figure)
-    axes = figure.subplots(1, len(RATIOS) - 1, sharey=False)
-    labels = [f"{dim}D\n{threads} thr." for dim, _, threads in rows]
-    for ax, (a, b, title, goal) in zip(axes, RATIOS[1:]):
+    axes = figure.subplots(1, len(goals), sharey=False)
+    labels = [f"{case.replace(' block', '')}\n{threads} thr." for case, _, threads in rows]
+    for ax, (a, b, title, goal) in zip(axes, goals):
         values = np.array([[r[a] / r[b] for r in rs] for rs in rows.values()])
         median = np.median(values, axis=1)
         ax.bar(range(len(rows)), median, color="tab:blue", alpha=0.7)
@@ -57,10 +68,10 @@ def main(paths: list[str]) -> int:
         ax.set_title(title)
         ax.legend(loc="upper right", fontsize=8)
     axes[0].set_ylabel("ratio of particle-steps/s (median, min-max of runs)")
-    figure.suptitle(f"MLS-MPM elastic block, side by side ({len(runs)} runs, shared 2-core machine)")
+    figure.suptitle(f"MLS-MPM, side by side ({len(runs)} runs, shared 2-core machine)")
     figure.tight_layout()
-    figure.savefig(IMAGE, dpi=110)
-    print(f"wrote {IMAGE}")
+    figure.savefig(image, dpi=110)
+    print(f"wrote {image}")
     return 0
 
 

@@ -112,7 +112,7 @@ def measure(cells: int, threads: int, repeats: int) -> dict:
     C = p.extra["affine"]
 
     def copies():
-        sim.phases.particles_to_grid()   # (resets the grid first)
+        sim.phases.particles_to_grid(1e-5)   # (resets the grid first)
 
     def coloured():
         g.reset()

@@ -24,6 +24,33 @@ def _bspline(s):
     return base, f, (0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2)
 
 
+@njit(cache=True, inline="always")
+def _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p):
+    """2D G2P of particle p: v_p and C_p from the grid's velocities (in grid_mom), x_p moved;
+    returns v_p and C_p (inlined: no call level in the particle loop)."""
+    bx, fx, wx = _bspline(x[p, 0] * inv_dx)
+    by, fy, wy = _bspline(x[p, 1] * inv_dx)
+    vx = vy = c00 = c01 = c10 = c11 = 0.0
+    for j in range(3):
+        dy = j - fy
+        row = (by + j) * nx
+        for i in range(3):
+            dxi = i - fx
+            w = wx[i] * wy[j]
+            gvx, gvy = grid_mom[row + bx + i, 0], grid_mom[row + bx + i, 1]
+            vx += w * gvx
+            vy += w * gvy
+            c00 += 4.0 * inv_dx * w * gvx * dxi
+            c01 += 4.0 * inv_dx * w * gvx * dy
+            c10 += 4.0 * inv_dx * w * gvy * dxi
+            c11 += 4.0 * inv_dx * w * gvy * dy
+    v[p, 0], v[p, 1] = vx, vy
+    C[p, 0, 0], C[p, 0, 1], C[p, 1, 0], C[p, 1, 1] = c00, c01, c10, c11
+    x[p, 0] += dt * vx
+    x[p, 1] += dt * vy
+    return vx, vy, c00, c01, c10, c11
+
+
 @njit(parallel=True, cache=True)
 def step_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, copies_mass, copies_mom):
     dx = 1.0 / inv_dx
@@ -71,26 +98,7 @@ def step_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom,
             grid_mom[node, 0] /= grid_mass[node]
             grid_mom[node, 1] /= grid_mass[node]
     for p in prange(n):
-        bx, fx, wx = _bspline(x[p, 0] * inv_dx)
-        by, fy, wy = _bspline(x[p, 1] * inv_dx)
-        vx = vy = c00 = c01 = c10 = c11 = 0.0
-        for j in range(3):
-            dy = j - fy
-            row = (by + j) * nx
-            for i in range(3):
-                dxi = i - fx
-                w = wx[i] * wy[j]
-                gvx, gvy = grid_mom[row + bx + i, 0], grid_mom[row + bx + i, 1]
-                vx += w * gvx
-                vy += w * gvy
-                c00 += 4.0 * inv_dx * w * gvx * dxi
-                c01 += 4.0 * inv_dx * w * gvx * dy
-                c10 += 4.0 * inv_dx * w * gvy * dxi
-                c11 += 4.0 * inv_dx * w * gvy * dy
-        v[p, 0], v[p, 1] = vx, vy
-        C[p, 0, 0], C[p, 0, 1], C[p, 1, 0], C[p, 1, 1] = c00, c01, c10, c11
-        x[p, 0] += dt * vx
-        x[p, 1] += dt * vy
+        vx, vy, c00, c01, c10, c11 = _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
         f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
         F[p, 0, 0] = f00 + dt * (c00 * f00 + c01 * f10)
         F[p, 0, 1] = f01 + dt * (c00 * f01 + c01 * f11)
@@ -217,3 +225,82 @@ class ReferenceMLS:
     def advance(self, dt: float) -> None:
         self._step(dt, self.inv_dx, self.nx, self.x, self.v, self.C, self.F, self.mass, self.vol, self.lam,
                    self.mu, self.grid_mass, self.grid_mom, self.copies_mass, self.copies_mom)
+
+
+# -- mpm88: Taichi's 88-line weakly compressible fluid, the issue's scene --------------
+
+@njit(parallel=True, cache=True)
+def step_mpm88(dt, inv_dx, nx, gravity, bulk, bound, x, v, C, J, mass, vol, grid_mass, grid_mom, copies_mass,
+               copies_mom):
+    """One step of Taichi's mpm88 (MLS-MPM, quadratic B-splines, pressure stress K (J - 1) folded
+    into the affine momentum, J carried as a scalar: J *= 1 + dt tr C), float64; gravity on the
+    grid, and walls `bound` nodes thick that stop a node moving out of the grid (as mpm88)."""
+    dx = 1.0 / inv_dx
+    n = x.shape[0]
+    threads = copies_mass.shape[0] + 1
+    grid_mass[:] = 0.0
+    grid_mom[:, :] = 0.0
+    for t in prange(threads):
+        gm, gp = grid_mass, grid_mom
+        if t > 0:
+            gm, gp = copies_mass[t - 1], copies_mom[t - 1]
+            gm[:] = 0.0
+            gp[:, :] = 0.0
+        for p in range((n * t) // threads, (n * (t + 1)) // threads):
+            bx, fx, wx = _bspline(x[p, 0] * inv_dx)
+            by, fy, wy = _bspline(x[p, 1] * inv_dx)
+            stress = -dt * 4.0 * bulk * vol[p] * (J[p] - 1.0) * inv_dx * inv_dx
+            m = mass[p]
+            a00, a01 = stress + m * C[p, 0, 0], m * C[p, 0, 1]
+            a10, a11 = m * C[p, 1, 0], stress + m * C[p, 1, 1]
+            mvx, mvy = m * v[p, 0], m * v[p, 1]
+            for j in range(3):
+                dy = (j - fy) * dx
+                row = (by + j) * nx
+                for i in range(3):
+                    dxi = (i - fx) * dx
+                    w = wx[i] * wy[j]
+                    node = row + bx + i
+                    gm[node] += w * m
+                    gp[node, 0] += w * (mvx + a00 * dxi + a01 * dy)
+                    gp[node, 1] += w * (mvy + a10 * dxi + a11 * dy)
+    last = nx - 1 - bound
+    for node in prange(grid_mass.shape[0]):
+        for t in range(threads - 1):
+            grid_mass[node] += copies_mass[t, node]
+            grid_mom[node, 0] += copies_mom[t, node, 0]
+            grid_mom[node, 1] += copies_mom[t, node, 1]
+        if grid_mass[node] > 0.0:
+            grid_mom[node, 0] /= grid_mass[node]
+            grid_mom[node, 1] /= grid_mass[node]
+        grid_mom[node, 1] -= dt * gravity
+        ij = (node % nx, node // nx)
+        for a in range(2):
+            if (ij[a] < bound and grid_mom[node, a] < 0.0) or (ij[a] > last and grid_mom[node, a] > 0.0):
+                grid_mom[node, a] = 0.0
+    for p in prange(n):
+        vx, vy, c00, c01, c10, c11 = _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
+        J[p] *= 1.0 + dt * (c00 + c11)
+
+
+class ReferenceMPM88:
+    """Taichi's mpm88 on the particles of a solver scene (unit grid, origin 0), stepped by
+    `step_mpm88`."""
+
+    BOUND = 3   # mpm88's wall thickness in nodes
+
+    def __init__(self, x, v, mass, volume, cells: int, bulk: float, gravity: float, threads: int):
+        self.x, self.v = x.copy(), v.copy()
+        self.mass, self.vol = mass.copy(), volume.copy()
+        self.C = np.zeros((x.shape[0], 2, 2))
+        self.J = np.ones(x.shape[0])
+        self.inv_dx, self.nx = float(cells), cells + 1
+        n_nodes = self.nx ** 2
+        self.grid_mass, self.grid_mom = np.zeros(n_nodes), np.zeros((n_nodes, 2))
+        self.copies_mass = np.zeros((threads - 1, n_nodes))
+        self.copies_mom = np.zeros((threads - 1, n_nodes, 2))
+        self.bulk, self.gravity = bulk, gravity
+
+    def advance(self, dt: float) -> None:
+        step_mpm88(dt, self.inv_dx, self.nx, self.gravity, self.bulk, self.BOUND, self.x, self.v, self.C, self.J,
+                   self.mass, self.vol, self.grid_mass, self.grid_mom, self.copies_mass, self.copies_mom)

@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from reference_mls import ReferenceMLS  # noqa: E402
+from reference_mls import ReferenceMLS, ReferenceMPM88  # noqa: E402
 from reference_mpm2d import ReferenceMPM2D  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
@@ -81,6 +81,36 @@ def mls_block_scene(dim: int, cells: int, threads: int, transfer: str = "apic") 
     return scene
 
 
+GENERAL = True           # time the general kernels too (--no-general: not)
+MPM88_DT = 1e-4          # Taichi's mpm88 benchmark (n_grid 128, dt 1e-4)
+MPM88_BULK = 400.0       # its E: the pressure K (J - 1) of a fluid of density 1
+MPM88_GRAVITY = 9.8
+
+
+def mpm88_scene(threads: int, transfer: str = "mls") -> dict:
+    """Taichi's mpm88: a block of weakly compressible fluid (density 1, K = 400, no viscosity)
+    falling at 1 m/s under gravity in the unit square, 128 x 128 cells, quadratic B-splines, USL.
+    The block is 52 x 52 cells at 7 x 7 particles a cell (132,496 particles; mpm88 drops
+    random ones into [0.2, 0.6]^2); walls are slip walls on the faces (mpm88: 3 nodes thick,
+    stopping only motion out of the grid, which the block does not reach in the steps measured)."""
+    lower, upper = 24 / 128, 76 / 128
+    return {
+        "version": 1, "name": "mpm88", "dimension": 2,
+        "method": {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": transfer},
+        "grid": {"lower": [0.0, 0.0], "upper": [1.0, 1.0], "cell_size": 1 / 128},
+        "materials": {"water": {"model": "fluid", "density": 1.0, "bulk_modulus": MPM88_BULK, "gamma": 1.0,
+                                "viscosity": 0.0}},
+        "bodies": [{"name": "water", "material": "water", "particles_per_cell": 7,
+                    "geometry": {"type": "box", "lower": [lower] * 2, "upper": [upper] * 2},
+                    "initial_velocity": [0.0, -1.0]}],
+        "boundary_conditions": [{"type": "wall", "face": face, "mode": "slip"} for face in ("x-", "x+", "y-", "y+")],
+        "gravity": [0.0, -MPM88_GRAVITY],
+        "time": {"end": 1.0, "dt": MPM88_DT},
+        "output": {"frames": 2, "fields": ["position"]},
+        "parallel": {"threads": threads},
+    }
+
+
 def _framework(script: str, args: list[str], python: str, threads: int) -> dict:
     env = {**os.environ, "OMP_NUM_THREADS": str(threads)}
     done = subprocess.run([python, str(FRAMEWORKS / script), *args], capture_output=True, text=True, env=env,
@@ -94,8 +124,6 @@ def _framework(script: str, args: list[str], python: str, threads: int) -> dict:
 
 def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, warp_rate: dict) -> dict:
     """Particle-steps/s of the five implementations of one block at one thread count."""
-    import numba
-
     sim = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
     mls = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads, "mls")))
     general = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
@@ -105,16 +133,8 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
     model = sim.materials[0][0]
     reference = ReferenceMLS(p.x, p.v, p.mass, p.volume, cells, model.lam, model.mu, threads)
     n = p.count
-    contenders = {"solver": sim, "mls": mls, "general": general, "numba": reference}
-    best = {name: 0.0 for name in contenders}
-    for name, stepper in contenders.items():     # compile, and set the thread count each uses
-        numba.set_num_threads(threads)
-        stepper.advance(MLS_DT)
-    for _ in range(3):
-        for name, stepper in contenders.items():
-            numba.set_num_threads(threads)
-            measured = rate(stepper, n, steps if name != "general" else max(2, steps // 4), MLS_DT)
-            best[name] = max(best[name], measured)
+    best = _alternate({"solver": sim, "mls": mls, "mls_unfolded": _unfolded(mls_block_scene(dim, cells, threads, "mls")),
+                       "general": general, "numba": reference}, threads, steps, MLS_DT, n)
     with tempfile.TemporaryDirectory() as tmp:
         block = Path(tmp) / "block.npz"
         np.savez(block, x=start_x, v=start_v, mass=p.mass, volume=p.volume, cells=cells, lam=model.lam,
@@ -123,7 +143,55 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
         if (dim, cells) not in warp_rate:          # Warp's CPU device runs on one thread
             warp_rate[(dim, cells)] = _framework("mls_warp.py", [str(block), str(steps)], python, 1)["rate"]
         best["warp"] = warp_rate[(dim, cells)]
-    return {"dimension": dim, "particles": n, "threads": threads, **best}
+    return {"case": f"{dim}D block", "dimension": dim, "particles": n, "threads": threads, **best}
+
+
+def side_by_side_mpm88(threads: int, steps: int, python: str, warp_rate: dict) -> dict:
+    """Particle-steps/s of the mpm88 fluid: the solver (APIC, MLS, MLS on the general kernels),
+    the numba reference `step_mpm88`, Taichi and Warp, on the particles the solver seeded."""
+    apic = ExplicitMPM(load_scene(mpm88_scene(threads, "apic")))
+    mls = ExplicitMPM(load_scene(mpm88_scene(threads)))
+    general = ExplicitMPM(load_scene(mpm88_scene(threads)))
+    general.use_general_kernels()
+    p = mls.particles
+    reference = ReferenceMPM88(p.x, p.v, p.mass, p.volume, 128, MPM88_BULK, MPM88_GRAVITY, threads)
+    block = {"x": p.x.copy(), "v": p.v.copy(), "mass": p.mass, "volume": p.volume, "cells": 128,
+             "bulk": MPM88_BULK, "gravity": MPM88_GRAVITY, "bound": ReferenceMPM88.BOUND, "dt": MPM88_DT}
+    best = _alternate({"solver": apic, "mls": mls, "mls_unfolded": _unfolded(mpm88_scene(threads)),
+                       "general": general, "numba": reference}, threads, steps, MPM88_DT, p.count)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "mpm88.npz"
+        np.savez(path, **block)
+        best["taichi"] = _framework("mpm88_taichi.py", [str(path), str(threads), str(steps)], python, threads)["rate"]
+        if "mpm88" not in warp_rate:
+            warp_rate["mpm88"] = _framework("mpm88_warp.py", [str(path), str(steps)], python, 1)["rate"]
+        best["warp"] = warp_rate["mpm88"]
+    return {"case": "mpm88", "dimension": 2, "particles": p.count, "threads": threads, **best}
+
+
+def _unfolded(scene: dict) -> ExplicitMPM:
+    """The solver's MLS step as it was before the fused P2G folded dt f_I into the momentum
+    (solver/step/fused.py `folds_force`): the force scattered on its own, same step to round-off."""
+    sim = ExplicitMPM(load_scene(scene))
+    sim.phases.folds_force = lambda: False
+    return sim
+
+
+def _alternate(contenders: dict, threads: int, steps: int, dt: float, n: int) -> dict:
+    """Best of three rates of each stepper, taking turns (the general kernels run a quarter of the steps)."""
+    import numba
+
+    if not GENERAL:
+        contenders.pop("general")
+    for stepper in contenders.values():     # compile, and set the thread count each uses
+        numba.set_num_threads(threads)
+        stepper.advance(dt)
+    best = {"general": float("nan")} | {name: 0.0 for name in contenders}
+    for _ in range(3):
+        for name, stepper in contenders.items():
+            numba.set_num_threads(threads)
+            best[name] = max(best[name], rate(stepper, n, steps if name != "general" else max(2, steps // 4), dt))
+    return best
 
 
 def rate(stepper, n_particles: int, steps: int, dt: float = DT) -> float:
@@ -190,7 +258,7 @@ def breakdown(dim: int, cells: int, repeats: int = 5) -> dict:
         reference.advance(MLS_DT)
     tiny = 1e-12   # phases timed on their own must not move the particles
     phases = {
-        "P2G (mass, momentum with APIC, force)": lambda: sim.phases.particles_to_grid(),
+        "P2G (mass, momentum with APIC, force)": lambda: sim.phases.particles_to_grid(MLS_DT),
         "grid update and boundary conditions": lambda: (kernels.integrate_nodes(
             tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new), sim.phases._constrain(g.v_new)),
         "G2P (v, C, x; L, F, V)": lambda: sim.phases.grid_to_particles(tiny, remap=False, kinematics=True),
@@ -220,13 +288,14 @@ def print_breakdown(rows: list[dict]) -> None:
 def print_side_by_side(rows: list[dict]) -> None:
     print("part 1: the same elastic-block step (quadratic B-splines, APIC, neo-Hookean, float64), "
           "M particle-steps/s")
-    head = ("case", "particles", "threads", "solver APIC", "solver MLS", "general", "numba MLS", "Taichi",
-            "Warp (1 thr.)", "APIC/numba", "MLS/numba", "MLS/Taichi", "MLS/Warp")
+    head = ("case", "particles", "threads", "solver APIC", "solver MLS", "MLS unfolded", "general", "numba MLS",
+            "Taichi", "Warp (1 thr.)", "APIC/numba", "MLS/numba", "MLS/Taichi", "MLS/Warp", "MLS/unfolded")
     print("".join(f"{h:>14}" for h in head))
     for r in rows:
-        cells = (f"{r['dimension']}D block", f"{r['particles']:,}", r["threads"], *(f"{r[k] / 1e6:.2f}" for k in
-                 ("solver", "mls", "general", "numba", "taichi", "warp")), f"{r['solver'] / r['numba']:.2f}",
-                 *(f"{r['mls'] / r[k]:.2f}" for k in ("numba", "taichi", "warp")))
+        cells = (r["case"], f"{r['particles']:,}", r["threads"], *(f"{r[k] / 1e6:.2f}" for k in
+                 ("solver", "mls", "mls_unfolded", "general", "numba", "taichi", "warp")),
+                 f"{r['solver'] / r['numba']:.2f}", *(f"{r['mls'] / r[k]:.2f}" for k in ("numba", "taichi", "warp",
+                                                                                        "mls_unfolded")))
         print("".join(f"{c:>14}" for c in cells))
 
 
@@ -239,6 +308,9 @@ def main() -> int:
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--skip-part2", action="store_true")
     parser.add_argument("--side-by-side-only", action="store_true", help="part 1 only (no breakdown, no part 2)")
+    parser.add_argument("--no-general", action="store_true", help="leave out the general kernels (part 1)")
+    parser.add_argument("--mpm88-steps", type=int, default=20,
+                        help="steps of each timing on the mpm88 fluid (0: leave it out)")
     parser.add_argument("--blocks", nargs="+", metavar="DIM:CELLS:STEPS",
                         help="the blocks of part 1 (default: 2:112:60 2:225:15 3:32:6 3:40:4)")
     args = parser.parse_args()
@@ -254,8 +326,13 @@ def main() -> int:
     if args.blocks:
         blocks = [tuple(int(v) for v in b.split(":")) for b in args.blocks]
     warp_rate: dict = {}
+    global GENERAL
+    GENERAL = not args.no_general
     side = [side_by_side(dim, cells, threads, steps, args.frameworks_python, warp_rate)
             for dim, cells, steps in blocks for threads in args.threads]
+    if args.mpm88_steps:
+        side += [side_by_side_mpm88(threads, args.mpm88_steps, args.frameworks_python, warp_rate)
+                 for threads in args.threads]
     print_side_by_side(side)
     if args.side_by_side_only:
         if args.json:

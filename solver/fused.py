@@ -44,7 +44,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from solver import shape
 # which scenes the fused kernels run: decided without numba (the run-time estimates read it too)
@@ -110,3 +110,21 @@ def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_for
         add_copies(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
+
+@njit(cache=True)
+def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
+    """`_reduce` of a P2G that folded the force into the momentum (no force copies to add)."""
+    if copies_mass.shape[0] > 0:
+        _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom)
+
+
+@njit(parallel=True, cache=True)
+def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
+    """As solver/threads.py's add_copies without the force: one parallel loop over the nodes
+    (two, one per array, were not faster)."""
+    n, dim = grid_mom.shape
+    for i in prange(n):
+        for t in range(copies_mass.shape[0]):
+            grid_mass[i] += copies_mass[t, i]
+            for a in range(dim):
+                grid_mom[i, a] += copies_mom[t, i, a]

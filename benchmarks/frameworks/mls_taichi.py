@@ -7,12 +7,12 @@ thread pool). Same arithmetic as the numba reference: quadratic B-splines, the
 stress folded into the APIC affine momentum, neo-Hookean Kirchhoff stress, float64.
 """
 
-import json
 import sys
-import time
 
 import numpy as np
 import taichi as ti
+
+from timing import report_rate
 
 
 def main(path: str, threads: int, steps: int) -> None:
@@ -84,17 +84,7 @@ def main(path: str, threads: int, steps: int) -> None:
     F.from_numpy(np.tile(np.eye(dim), (n, 1, 1)))
     C.from_numpy(np.zeros((n, dim, dim)))
     dt = float(data["dt"])
-    for _ in range(3):          # compile
-        step(dt)
-    ti.sync()
-    best = 0.0
-    for _ in range(3):
-        start = time.perf_counter()
-        for _ in range(steps):
-            step(dt)
-        ti.sync()
-        best = max(best, n * steps / (time.perf_counter() - start))
-    print(json.dumps({"rate": best, "x_mean": float(x.to_numpy().mean())}))
+    report_rate(lambda: step(dt), ti.sync, n, steps, x.to_numpy)
 
 
 if __name__ == "__main__":

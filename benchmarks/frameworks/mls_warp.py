@@ -6,12 +6,12 @@ Run by benchmarks/throughput.py in its own process. Warp runs CPU kernels on one
 thread. Same arithmetic as the numba reference: quadratic B-splines, the stress
 folded into the APIC affine momentum, neo-Hookean Kirchhoff stress, float64.
 """
-import json
 import sys
-import time
 
 import numpy as np
 import warp as wp
+
+from timing import report_rate
 
 f64 = wp.float64
 
@@ -183,17 +183,7 @@ def main(path: str, steps: int) -> None:
         wp.launch(grid, dim=shape, inputs=[grid_m, grid_v], device=device)
         wp.launch(g2p, dim=n, inputs=[x, v, C, F, grid_v, dt, inv_dx], device=device)
 
-    for _ in range(3):           # compile
-        step()
-    wp.synchronize()
-    best = 0.0
-    for _ in range(3):
-        start = time.perf_counter()
-        for _ in range(steps):
-            step()
-        wp.synchronize()
-        best = max(best, n * steps / (time.perf_counter() - start))
-    print(json.dumps({"rate": best, "x_mean": float(x.numpy().mean())}))
+    report_rate(step, wp.synchronize, n, steps, x.numpy)
 
 
 if __name__ == "__main__":

@@ -46,18 +46,33 @@ class FusedPhases(Phases):
         self._bad = np.empty(sim.threads, dtype=np.int64)   # each block's first failing particle
         affine, blend = fused.constant(apic), fused.constant(sim.flip_ratio > 0.0)
         mls = fused.constant(apic and sim.affine.mls)
-        self._p2g_variant = (self._support, affine, fused.constant(sim.loads.any), mls)
+        self._p2g_variants = {fold: (self._support, affine, fused.constant(sim.loads.any), mls, fused.constant(fold))
+                              for fold in (False, True)}
         self._g2p_variants = {mode: (self._support, fused.constant(mode), affine, blend, mls)
                               for mode in (fused.USL, fused.REMAP, fused.KINEMATICS)}
 
     def weights(self) -> None:
         """Nothing to store: every kernel evaluates the weights it needs."""
 
+    def folds_force(self) -> bool:
+        """Whether P2G adds dt f_I into (mv)_I instead of forming f_I: MLS (so that a node's
+        dt f_I / m_I is bounded as its velocity is, the force being w-weighted like the momentum),
+        no FLIP blend and no hook that reads or adds to f_I or reads v_I^t (loads on nodes,
+        damping, absorbing faces, conduction: after_forces and before_update; contact fields
+        are not fused). v_I^t is then not formed: the grid update gives q_I / m_I for both
+        v_I^t and v~_I^{t+dt}, and v~_I^{t+dt} equals the unfolded step's to round-off, except
+        on nodes below the mass cut-off, where the unfolded step drops dt f_I / m_I (their
+        weight in any particle's gather is below 1e-9: docs/benchmarks.md, issue 18 third part)."""
+        sim = self.sim
+        return (sim.affine is not None and sim.affine.mls and sim.flip_ratio == 0.0
+                and not sim.hooks.after_forces and not sim.hooks.before_update)
+
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
         p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
-        self._kernels.p2g(self._p2g_variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc,
-                          self._frame, self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad)
+        variant = self._p2g_variants[self.folds_force()]
+        self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc, self._frame,
+                          self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt)
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")

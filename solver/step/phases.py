@@ -28,15 +28,18 @@ class Phases:
 
     def __init__(self, sim):
         self.sim = sim
+        self.dt = 0.0              # the step's dt, set by particles_to_grid
         self.acceleration = None   # the body acceleration of this step, for the loads' work
 
     # -- P2G ------------------------------------------------------------------
 
-    def particles_to_grid(self) -> None:
-        """m_I, (mv)_I and f_I = sum_p m_p phi_I b_p - V_p sigma_p grad phi_I (lines 8-12)."""
+    def particles_to_grid(self, dt: float) -> None:
+        """m_I, (mv)_I and f_I = sum_p m_p phi_I b_p - V_p sigma_p grad phi_I (lines 8-12); dt is
+        the step's, for a backend that folds dt f_I into (mv)_I (solver/step/fused.py)."""
         sim = self.sim
         g = sim.grid
         g.reset()
+        self.dt = dt
         self._p2g(self._body_acceleration())
         self._after_forces()
         sim.domain.sum_ghosts(g.mass, g.momentum, g.force)   # (processes: ghost nodes to owners)

@@ -9,7 +9,7 @@ from __future__ import annotations
 def usl(step, dt: float) -> None:
     """Update stress last, from v~_I^{t+dt} (no remap)."""
     step.weights()                                          # phi_I(x_p), grad phi_I(x_p)
-    step.particles_to_grid()                                # lines 8-12: m_I, (mv)_I, f_I
+    step.particles_to_grid(dt)                              # lines 8-12: m_I, (mv)_I, f_I
     step.grid_velocities(dt)                                # lines 14-17: v_I^t, v~_I^{t+dt}
     step.grid_to_particles(dt, remap=False, kinematics=True)   # lines 18-19, 25-27: v_p, x_p; L, F, V
     step.stress(dt)                                         # line 28
@@ -19,7 +19,7 @@ def musl(step, dt: float) -> None:
     """Modified update stress last: the particles' new momentum is mapped back to the
     grid and the stress is updated from that velocity."""
     step.weights()                                          # phi_I(x_p), grad phi_I(x_p)
-    step.particles_to_grid()                                # lines 8-12: m_I, (mv)_I, f_I
+    step.particles_to_grid(dt)                              # lines 8-12: m_I, (mv)_I, f_I
     step.grid_velocities(dt)                                # lines 14-17: v_I^t, v~_I^{t+dt}
     step.grid_to_particles(dt, remap=True)                  # lines 18-20: v_p, x_p; (mv)_I again
     step.remapped_velocities()                              # lines 21, 24: v_I^{t+dt}
