@@ -275,6 +275,20 @@ class Tools:
         self.displacement += dt * self.velocity
         self.elapsed += dt
 
+    # -- restart checkpoints (solver/checkpoint.py) ----------------------------------
+
+    def state(self) -> dict[str, np.ndarray]:
+        """What a checkpoint keeps: the displacement, and the impulses (summed over the
+        processes: a collective call) and time since the last series row."""
+        return {"displacement": self.displacement.copy(), "impulse": self.domain.sum(self.impulse),
+                "elapsed": np.array([self.elapsed])}
+
+    def restore(self, state: dict[str, np.ndarray], root: bool) -> None:
+        """The state of a checkpoint; the impulses' total goes to one process (`root`)."""
+        self.displacement[:] = state["displacement"]
+        self.impulse[:] = state["impulse"] if root else 0.0
+        self.elapsed = float(state["elapsed"][0])
+
     def series(self) -> dict[str, float]:
         """reaction_<tool>_<axis>: the mean force of the material on each tool since the last call
         (summed over the processes)."""
