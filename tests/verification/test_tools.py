@@ -245,3 +245,22 @@ def test_a_mesh_tool_pushes_as_the_same_box_does():
     for axis in "xyz":   # float32 STL corners: the faces sit within 1e-8 of the box's
         assert runs["mesh"][0][f"reaction_punch_{axis}"] == pytest.approx(runs["box"][0][f"reaction_punch_{axis}"],
                                                                          rel=1e-5, abs=1e-9)
+
+
+def test_a_tool_pushes_its_body_in_a_field_per_body():
+    """With contact "friction" (a velocity field per body) the tool's forces go into the
+    field of the pushed particles' body (the second body here): that body's momentum
+    changes by minus the reaction, the other body's not at all."""
+    scene = block_and_wedge(friction=0.0)
+    scene["bodies"].insert(0, {"name": "other", "material": "m",
+                               "geometry": {"type": "box", "lower": [0.05, 0.05], "upper": [0.2, 0.2]}})
+    scene["contact"] = {"model": "friction"}
+    sim = ExplicitMPM(load_scene(scene))
+    before = series.momentum(sim)
+    while sim.time < 0.02:
+        sim.advance(sim.stable_time_step(0.5))
+    after, reaction = series.momentum(sim), sim.reactions()
+    assert reaction["reaction_cutter_y"] > 0
+    change = after["momentum_block_y"] - before["momentum_block_y"]
+    assert change == pytest.approx(-reaction["reaction_cutter_y"] * sim.time, rel=1e-9)
+    assert after["momentum_other_y"] == before["momentum_other_y"] == 0.0
