@@ -47,6 +47,7 @@ TERMS: list[Term] = [
     Term("boundary_work", WORK, lambda sim: sim.boundary_work),     # walls, velocity conditions, rigid bodies
     Term("damping_work", WORK, lambda sim: sim.damping_work, lambda scene: scene.damping is not None),
     Term("friction_work", WORK, lambda sim: sim.friction_work, lambda scene: frictional(scene)),   # solver/contact.py
+    Term("tool_work", WORK, lambda sim: sim.tool_work, lambda scene: bool(scene.tools)),   # solver/tools.py
 ]
 
 

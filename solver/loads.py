@@ -100,18 +100,28 @@ class AppliedLoads:
         rows = self._rows(p)
         self.rows = rows
         self.force = p.extra[self.SHARE][rows] @ self.values(sim.time)
-        if rows.size == 0:
-            return
-        x = np.ascontiguousarray(sim.formulation.positions(p)[rows])
-        stencil = make_stencil(rows.size, self.dimension, sim.shape.SUPPORT)
-        subset = SimpleNamespace(extra={k: np.ascontiguousarray(a[rows]) for k, a in p.extra.items()},
-                                 F=np.ascontiguousarray(p.F[rows]))
-        sim.domain.weights(sim.shape, sim.spec, x, subset, sim.grid, stencil)   # (outside: the step reports it)
-        np.add.at(sim.grid.force, stencil.idx, stencil.w[:, :, None] * self.force[:, None, :])
+        spread_forces(sim, rows, self.force)
 
     def end_step(self, sim, dt: float) -> None:
         if self.rows.size:
             sim.external_work += dt * float(np.sum(self.force * sim.particles.v[self.rows]))
+
+
+def spread_forces(sim, rows: np.ndarray, force: np.ndarray) -> None:
+    """f_I += sum_p phi_I(x_p) f_p over the particles `rows` with forces `force` ((rows, dim)),
+    the weights evaluated for those particles only (at X_p in TLMPM; the fused backend stores
+    none). With a velocity field per body (solver/contact.py) each goes into its body's field."""
+    if rows.size == 0:
+        return
+    p, grid = sim.particles, sim.grid
+    x = np.ascontiguousarray(sim.formulation.positions(p)[rows])
+    stencil = make_stencil(rows.size, p.dimension, sim.shape.SUPPORT)
+    subset = SimpleNamespace(extra={k: np.ascontiguousarray(a[rows]) for k, a in p.extra.items()},
+                             F=np.ascontiguousarray(p.F[rows]))
+    sim.domain.weights(sim.shape, sim.spec, x, subset, grid, stencil)   # (outside: the step reports it)
+    if grid.fields > 1:
+        stencil.idx += p.body[rows][:, None] * grid.n_nodes   # field b holds body b (contact.FieldContact)
+    np.add.at(grid.force, stencil.idx, stencil.w[:, :, None] * force[:, None, :])
 
 
 def _shares(scene, index: int, particles) -> np.ndarray:

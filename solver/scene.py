@@ -570,6 +570,23 @@ class Damping(SceneModel):
         return self
 
 
+# --------------------------------------------------------------------------- tools
+
+ToolGeometry = Annotated[Union[PolygonGeometry, MeshGeometry, SphereGeometry, BoxGeometry], Field(discriminator="type")]
+
+
+class Tool(SceneModel):
+    """A rigid obstacle moving with a prescribed velocity that pushes the particles entering
+    it by a Hertz penalty (Karamelo 4.4; solver/tools.py). `stiffness` is a multiple of the
+    touched material's shear modulus; `friction` is Coulomb's mu against the particles."""
+
+    name: Annotated[str, Field(min_length=1)]
+    geometry: ToolGeometry             # polygon (2D), mesh (3D), sphere, box
+    velocity: Annotated[list[TimeValue], Field(min_length=1, max_length=3)] | None = None   # None: at rest
+    stiffness: Positive = 1.0
+    friction: NonNegative = 0.0
+
+
 # --------------------------------------------------------------------------- contact
 
 class ContactPair(SceneModel):
@@ -728,6 +745,7 @@ class Scene(SceneModel):
     loads: list[Load] = Field(default_factory=list)
     damping: Damping | None = None
     contact: Contact = Field(default_factory=Contact)
+    tools: list[Tool] = Field(default_factory=list)
     time: Time
     output: Output = Field(default_factory=Output)
     parallel: Parallel = Field(default_factory=Parallel)
@@ -870,6 +888,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     problems += _condition_problems(scene, length_ok)
     problems += thermal_problems(scene, THERMAL_CONDITIONS, length_ok)
     problems += _contact_problems(scene, names)
+    problems += _tool_problems(scene, length_ok, expressions_ok)
     if grid_ok:
         problems += slab_problems(scene)
     return problems
@@ -950,6 +969,33 @@ def _contact_problems(scene: Scene, names: dict[str, int]) -> list[tuple[str, st
                                           f"{needed / 2**30:.3g} GiB, more than the "
                                           f"{capabilities.MAX_CONTACT_FIELD_BYTES / 2**30:.3g} GiB allowed: "
                                           f"fewer bodies or a coarser grid"))
+    return problems
+
+
+def _tool_problems(scene: Scene, length_ok, expressions_ok) -> list[tuple[str, str]]:
+    """Tools: names that give distinct reaction series, a geometry and velocity of the scene's
+    dimension, and materials with a shear modulus for the stiffness to be a multiple of."""
+    problems: list[tuple[str, str]] = []
+    series = {body.name.replace("/", "_"): f"bodies[{b}]" for b, body in enumerate(scene.bodies)
+              if isinstance(scene.materials.get(body.material), Rigid)}   # their reaction_<body>_<axis>
+    for i, tool in enumerate(scene.tools):
+        path = f"tools[{i}]"
+        key = tool.name.replace("/", "_")
+        if key in series:
+            problems.append((f"{path}.name", f"{tool.name!r} is already the name of {series[key]} (their "
+                                             f"reaction series reaction_{key}_<axis> would be the same)"))
+        series.setdefault(key, path)
+        _geometry_problems(f"{path}.geometry", tool.geometry, scene.dimension, problems)
+        if length_ok(f"{path}.velocity", tool.velocity):
+            expressions_ok(f"{path}.velocity", tool.velocity, TIME_VARIABLES)
+    if scene.tools and scene.axisymmetric:
+        problems.append(("tools", "are not supported yet in axisymmetric scenes"))
+    for b, body in enumerate(scene.bodies if scene.tools else ()):
+        material = scene.materials.get(body.material)
+        if material is not None and not isinstance(material, Rigid) and not hasattr(material, "shear_modulus"):
+            problems.append(("tools", f"a tool's stiffness is a multiple of the shear modulus of the material it "
+                                      f"touches, and bodies[{b}] ({body.name!r}) is of material {body.material!r} "
+                                      f"(model {material.model!r}), which has none"))
     return problems
 
 

@@ -20,6 +20,7 @@ from solver.loads import AppliedLoads, BodyLoads
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, material_slices
+from solver.tools import Tools
 from solver.thermal_schema import conducts, expands
 from solver.transfer import affine_transfer
 
@@ -73,6 +74,7 @@ class ExplicitMPM:
         self.boundary_work = 0.0
         self.damping_work = 0.0
         self.friction_work = 0.0
+        self.tool_work = 0.0
         self.scheme = step.SCHEMES[method.scheme]
         self.phases = step.backend_for(scene, general)(self)
         self.added_hooks = []   # hooks given by add_hook, kept when the grid is placed again
@@ -81,6 +83,7 @@ class ExplicitMPM:
         self.domain.distribute(self.particles)
         self.axisymmetry = Axisymmetry(scene, self.particles) if scene.axisymmetric else None
         self.rigid = RigidBodies(scene, self.particles, self.domain)
+        self.tools = Tools(scene, self.domain) if scene.tools else None   # solver/tools.py
         # the boundary conditions' reactions, kept across placements of the grid (the `reactions` series)
         self.condition_reactions = ConditionReactions(scene) if "reactions" in scene.output.series else None
         self.place()

@@ -21,7 +21,8 @@ The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_st
 contact with a field per body (after_weights, before_update, constrain: solver/contact.py;
 the rigid bodies then only move and their fields meet the others there),
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
-(end_step), the applied `loads` (after_forces, end_step: solver/loads.py), `absorbing`
+(end_step), the applied `loads` (after_forces, end_step: solver/loads.py), the `tools`
+(begin_step, after_forces, end_step, their reaction series: solver/tools.py), `absorbing`
 boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress),
@@ -154,6 +155,10 @@ def _applied_loads(sim):
     return sim.applied_loads
 
 
+def _tools(sim):
+    return sim.tools
+
+
 def _absorbing_faces(sim):
     absorbing = any(condition.type == "absorbing" for condition in sim.scene.boundary_conditions)
     return AbsorbingFaces(sim.scene, sim.grid) if absorbing else None
@@ -178,7 +183,7 @@ def _damping(sim):
 # rigid bodies moved; damping acts on the forces of every other hook; F-bar averages the
 # volume after the hoop terms changed it and puts the particles' own F, L and V back after
 # every other stress hook.
-HOOKS = [_rigid_bodies, _field_contact, _grid_conditions, _hoop_terms, _external_work, _applied_loads,
+HOOKS = [_rigid_bodies, _field_contact, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _tools,
          _absorbing_faces, _damping, make_conduction, make_expansion, _fbar, _shape_hook]
 
 

@@ -1,0 +1,286 @@
+"""Tools (Karamelo 4.4): rigid obstacles that move with a prescribed velocity and push
+the particles that enter them by a Hertz-type penalty force.
+
+A tool is not made of particles and has no grid field: it is a region (a polygon in
+2D, a closed triangle mesh in 3D, a sphere or a box in either) that the particles may
+not enter. A particle p of a deformable body found inside it at depth d (its distance
+to the tool's surface) gets the force
+
+    f_n = k G_p s_p^(dim-1) (d / s_p)^(3/2) (1 - D_p)     along the outward normal n,
+
+where k is the tool's `stiffness`, G_p the shear modulus of the particle's material,
+s_p = V0_p^(1/dim) the particle's size (its spacing, so that G (d/s)^(3/2) is a contact
+pressure on the particle's face s^(dim-1)) and D_p its damage (Johnson-Cook; 0 without
+damage), so that failed material no longer resists the tool, as in Karamelo. The 3/2
+power is Hertz's (Karamelo eq. 4.4, F = (pi/2) G (1 + nu)/(1 - nu^2) p^(3/2), whose
+length scale is left implicit; Karamelo's code uses K G p). With `friction` mu, a
+Coulomb force opposes the particle's sliding relative to the tool, at most mu f_n and
+at most m_p |v_t| / dt (it stops the sliding, it never reverses it).
+
+The forces enter the step as particle external forces (after_forces: f_I += sum_p
+phi_I f_p, solver/loads.py's `spread_forces`), so the contact works in TLMPM, which has
+no grid contact, as in ULMPM, on one process or several (each process pushes the
+particles it holds; the reactions are summed). The tool moves after the step by dt
+times its velocity at the end of the step, as rigid bodies do (solver/rigid.py).
+
+Time series: reaction_<tool>_<axis>, the mean force of the material on the tool since
+the last row (minus the sum of the forces the particles received); energy: `tool_work`,
+dt sum_p f_p . v_p^(t+dt), the work the tools did on the bodies (solver/energy.py).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from solver.expressions import compile_expression
+from solver.geometry import from_spec
+from solver.loads import spread_forces
+
+AXES = "xyz"
+BOX, SPHERE, POLYGON, MESH = 0, 1, 2, 3
+KINDS = {"box": BOX, "sphere": SPHERE, "polygon": POLYGON, "mesh": MESH}
+
+
+# -- depth and outward normal of the points inside a tool ----------------------------
+
+@njit(cache=True)
+def _box_depth(q, lower, upper, depth, normal):
+    """Inside the box: the distance to the nearest face, and that face's outward normal."""
+    for i in range(q.shape[0]):
+        best, axis, sign = np.inf, -1, 0.0
+        for a in range(q.shape[1]):
+            below, above = q[i, a] - lower[a], upper[a] - q[i, a]
+            if below < 0.0 or above < 0.0:
+                axis = -1
+                break
+            if below < best:
+                best, axis, sign = below, a, -1.0
+            if above < best:
+                best, axis, sign = above, a, 1.0
+        if axis >= 0:
+            depth[i] = best
+            normal[i, axis] = sign
+
+
+@njit(cache=True)
+def _sphere_depth(q, center, radius, depth, normal):
+    for i in range(q.shape[0]):
+        r2 = 0.0
+        for a in range(q.shape[1]):
+            r2 += (q[i, a] - center[a]) ** 2
+        r = math.sqrt(r2)
+        if r < radius and r > 0.0:
+            depth[i] = radius - r
+            for a in range(q.shape[1]):
+                normal[i, a] = (q[i, a] - center[a]) / r
+
+
+@njit(cache=True)
+def _polygon_depth(q, vertices, depth, normal):
+    """Even-odd inside test and the nearest point of the outline, over every edge."""
+    n = vertices.shape[0]
+    for i in range(q.shape[0]):
+        px, py = q[i, 0], q[i, 1]
+        inside = False
+        best, cx, cy = np.inf, 0.0, 0.0
+        for e in range(n):
+            x0, y0 = vertices[e, 0], vertices[e, 1]
+            x1, y1 = vertices[(e + 1) % n, 0], vertices[(e + 1) % n, 1]
+            if (y0 <= py) != (y1 <= py):
+                if px < x0 + (py - y0) * (x1 - x0) / (y1 - y0):
+                    inside = not inside
+            ex, ey = x1 - x0, y1 - y0
+            length2 = ex * ex + ey * ey
+            s = ((px - x0) * ex + (py - y0) * ey) / length2 if length2 > 0.0 else 0.0
+            s = min(max(s, 0.0), 1.0)
+            nx, ny = x0 + s * ex, y0 + s * ey
+            d2 = (px - nx) ** 2 + (py - ny) ** 2
+            if d2 < best:
+                best, cx, cy = d2, nx, ny
+        if inside and best > 0.0:
+            d = math.sqrt(best)
+            depth[i] = d
+            normal[i, 0] = (cx - px) / d
+            normal[i, 1] = (cy - py) / d
+
+
+@njit(cache=True, inline="always")
+def _closest_on_triangle(p, a, b, c):
+    """The point of triangle abc nearest to p (Ericson, Real-Time Collision Detection 5.1.5)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = np.dot(ab, ap), np.dot(ac, ap)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return a
+    bp = p - b
+    d3, d4 = np.dot(ab, bp), np.dot(ac, bp)
+    if d3 >= 0.0 and d4 <= d3:
+        return b
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        return a + (d1 / (d1 - d3)) * ab
+    cp = p - c
+    d5, d6 = np.dot(ab, cp), np.dot(ac, cp)
+    if d6 >= 0.0 and d5 <= d6:
+        return c
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        return a + (d2 / (d2 - d6)) * ac
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)
+    denominator = 1.0 / (va + vb + vc)
+    return a + ab * (vb * denominator) + ac * (vc * denominator)
+
+
+@njit(parallel=True, cache=True)
+def _mesh_depth(q, inside, triangles, depth, normal):
+    """For the points inside the mesh, the nearest point of its surface (every triangle)."""
+    for i in prange(q.shape[0]):   # each point its own rows
+        if not inside[i]:
+            continue
+        p = q[i].copy()
+        best = np.inf
+        nearest = p
+        for t in range(triangles.shape[0]):
+            c = _closest_on_triangle(p, triangles[t, 0], triangles[t, 1], triangles[t, 2])
+            d2 = np.sum((c - p) ** 2)
+            if d2 < best:
+                best, nearest = d2, c
+        if best > 0.0:
+            d = math.sqrt(best)
+            depth[i] = d
+            for a in range(3):
+                normal[i, a] = (nearest[a] - p[a]) / d
+
+
+# -- the force ------------------------------------------------------------------------
+
+@njit(parallel=True, cache=True)
+def penalty_forces(rows, depth, normal, mass, v, size, modulus, damage, tool_velocity, stiffness, friction,
+                   dt, force):
+    """force[i] of particle rows[i] at `depth` inside the tool (outward `normal`): the Hertz
+    penalty along the normal and Coulomb friction against the sliding relative to the tool."""
+    dim = v.shape[1]
+    for i in prange(rows.shape[0]):   # each particle its own row
+        p = rows[i]
+        s = size[i]
+        fn = stiffness * modulus[i] * s ** (dim - 1) * (depth[i] / s) ** 1.5 * (1.0 - damage[i])
+        slide = np.zeros(dim)
+        along = 0.0
+        for a in range(dim):
+            slide[a] = v[p, a] - tool_velocity[a]
+            along += slide[a] * normal[i, a]
+        speed = 0.0
+        for a in range(dim):
+            slide[a] -= along * normal[i, a]
+            speed += slide[a] * slide[a]
+        speed = math.sqrt(speed)
+        ft = 0.0
+        if friction > 0.0 and speed > 0.0:
+            ft = min(friction * fn, mass[p] * speed / dt)
+        for a in range(dim):
+            force[i, a] = fn * normal[i, a] - (ft * slide[a] / speed if ft > 0.0 else 0.0)
+
+
+class Tool:
+    """One tool: its shape at rest, its velocity components, stiffness and friction."""
+
+    def __init__(self, spec, dim: int):
+        self.name = spec.name.replace("/", "_")
+        self.kind = KINDS[spec.geometry.type]
+        self.stiffness, self.friction = float(spec.stiffness), float(spec.friction)
+        shape = from_spec(spec.geometry)
+        self.lower, self.upper = (np.asarray(b, dtype=np.float64) for b in shape.bounding_box())
+        self.shape = shape
+        components = spec.velocity if spec.velocity is not None else [0.0] * dim
+        self.components = [compile_expression(c, ("t",)) if isinstance(c, str) else float(c) for c in components]
+
+    def velocity(self, t: float) -> np.ndarray:
+        return np.array([c if isinstance(c, float) else float(c.evaluate(t=t)) for c in self.components])
+
+    def depth(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Depth inside the tool (0 outside) and the outward normal of points q, in the tool's
+        own frame (the positions minus its displacement)."""
+        depth, normal = np.zeros(len(q)), np.zeros_like(q)
+        shape = self.shape
+        if self.kind == BOX:
+            _box_depth(q, shape.lower, shape.upper, depth, normal)
+        elif self.kind == SPHERE:
+            _sphere_depth(q, shape.center, shape.radius, depth, normal)
+        elif self.kind == POLYGON:
+            _polygon_depth(q, shape.vertices, depth, normal)
+        else:
+            _mesh_depth(q, shape.contains(q), shape.triangles, depth, normal)
+        return depth, normal
+
+
+class Tools:
+    """The scene's tools as a hook (solver/step/hooks.py): begin_step (their velocities at
+    the end of the step), after_forces (the penalty forces into f_I), end_step (their
+    impulses and work; they move); `series()` gives their reactions. Made once per run
+    (the simulation holds it, as it holds the rigid bodies): their displacement and
+    impulses outlive a new placement of the grid."""
+
+    def __init__(self, scene, domain):
+        dim = scene.dimension
+        self.domain = domain
+        self.tools = [Tool(spec, dim) for spec in scene.tools]
+        self.displacement = np.zeros((len(self.tools), dim))   # since t = 0; the tools move by it
+        self.velocity = np.zeros((len(self.tools), dim))       # at the end of the current step
+        self.impulse = np.zeros((len(self.tools), dim))        # sum dt f on the particles since the last row
+        self.elapsed = 0.0
+        self._dt = 0.0
+        self.pushed = []   # (tool, rows, forces) of the last step: its impulses, its work
+        modulus = [getattr(scene.materials[body.material], "shear_modulus", 0.0) for body in scene.bodies]
+        self.modulus_of_body = np.array(modulus, dtype=np.float64)   # 0: a rigid body, never pushed
+
+    def begin_step(self, sim, t_end: float) -> None:
+        self._dt = t_end - sim.time
+        for i, tool in enumerate(self.tools):
+            self.velocity[i] = tool.velocity(t_end)
+
+    def after_forces(self, sim) -> None:
+        p = sim.particles
+        self.pushed = []
+        pushable = (p.mass > 0.0) & (self.modulus_of_body[p.body] > 0.0)
+        for i, tool in enumerate(self.tools):
+            q = p.x - self.displacement[i]
+            near = np.flatnonzero(pushable & np.all((q >= tool.lower) & (q <= tool.upper), axis=1))
+            if near.size == 0:
+                continue
+            depth, normal = tool.depth(np.ascontiguousarray(q[near]))
+            inside = depth > 0.0
+            rows = near[inside]
+            if rows.size == 0:
+                continue
+            force = np.zeros((rows.size, p.dimension))
+            penalty_forces(rows, depth[inside], np.ascontiguousarray(normal[inside]), p.mass, p.v,
+                           p.volume0[rows] ** (1.0 / p.dimension), self.modulus_of_body[p.body[rows]],
+                           _damage(p, rows), self.velocity[i], tool.stiffness, tool.friction, self._dt, force)
+            spread_forces(sim, rows, force)
+            self.pushed.append((i, rows, force))
+
+    def end_step(self, sim, dt: float) -> None:
+        v = sim.particles.v
+        for i, rows, force in self.pushed:
+            self.impulse[i] += dt * force.sum(axis=0)
+            sim.tool_work += dt * float(np.sum(force * v[rows]))
+        self.displacement += dt * self.velocity
+        self.elapsed += dt
+
+    def series(self) -> dict[str, float]:
+        """reaction_<tool>_<axis>: the mean force of the material on each tool since the last call
+        (summed over the processes)."""
+        total = self.domain.sum(self.impulse)
+        force = -total / self.elapsed if self.elapsed > 0 else np.zeros_like(self.impulse)
+        self.impulse[:] = 0.0
+        self.elapsed = 0.0
+        return {f"reaction_{tool.name}_{AXES[a]}": float(force[i, a])
+                for i, tool in enumerate(self.tools) for a in range(force.shape[1])}
+
+
+def _damage(particles, rows: np.ndarray) -> np.ndarray:
+    damage = particles.extra.get("damage")
+    return np.zeros(rows.size) if damage is None else np.ascontiguousarray(damage[rows], dtype=np.float64)
