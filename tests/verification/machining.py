@@ -55,6 +55,14 @@ def machining_scene(cells_x: int = 320, cells_y: int = 80, cut: float | None = N
     return scene
 
 
+def rake_angle(scene: dict) -> float:
+    """The tool's rake angle (rad) from its polygon: the rake face runs from the cutting edge,
+    vertex 0, to vertex 3 (the vertices are rounded, so this is 10 deg to about 1e-7)."""
+    vertices = scene["tools"][0]["geometry"]["vertices"]
+    (x0, y0), (x3, y3) = vertices[0], vertices[3]
+    return math.atan2(x3 - x0, y3 - y0)
+
+
 def flow_stress(material: dict, eps: float) -> float:
     return material["A"] + material["B"] * eps ** material["n"]
 

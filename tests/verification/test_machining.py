@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from machining import DEPTH, HEIGHT, RAKE_DEG, chip_rise, cutting_forces, machining_scene, merchant, plateau, \
+from machining import DEPTH, HEIGHT, chip_rise, cutting_forces, machining_scene, merchant, plateau, rake_angle, \
     tool_travel
 
 
@@ -28,8 +28,10 @@ def steel():
 def _run(tmp_path_factory, cells_x, cells_y, cut, energies):
     from mpm_cases import Case
     from solver import run
-    return Case(run(machining_scene(cells_x, cells_y, cut, frames=3, energies=energies),
-                    tmp_path_factory.mktemp("machining")))
+    scene = machining_scene(cells_x, cells_y, cut, frames=3, energies=energies)
+    case = Case(run(scene, tmp_path_factory.mktemp("machining")))
+    case.scene = scene
+    return case
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +59,7 @@ def test_a_frictionless_tool_pushes_along_its_faces(coarse):
     fc, ft = cutting_forces(coarse.series())
     touching = fc > 0
     assert touching.sum() > 10
-    bound = -math.tan(math.radians(RAKE_DEG)) * fc[touching]
+    bound = -math.tan(rake_angle(coarse.scene)) * fc[touching]
     assert np.all(ft[touching] >= bound - 1e-9 * np.abs(bound))
     assert np.all(fc >= -1e-9 * np.abs(fc).max())   # the material never pulls the tool forward
 
