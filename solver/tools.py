@@ -107,21 +107,26 @@ def _polygon_depth(q, vertices, depth, normal):
 
 
 @njit(cache=True, inline="always")
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]   # (np.dot on vectors needs BLAS in numba)
+
+
+@njit(cache=True, inline="always")
 def _closest_on_triangle(p, a, b, c):
     """The point of triangle abc nearest to p (Ericson, Real-Time Collision Detection 5.1.5)."""
     ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = np.dot(ab, ap), np.dot(ac, ap)
+    d1, d2 = _dot(ab, ap), _dot(ac, ap)
     if d1 <= 0.0 and d2 <= 0.0:
         return a
     bp = p - b
-    d3, d4 = np.dot(ab, bp), np.dot(ac, bp)
+    d3, d4 = _dot(ab, bp), _dot(ac, bp)
     if d3 >= 0.0 and d4 <= d3:
         return b
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         return a + (d1 / (d1 - d3)) * ab
     cp = p - c
-    d5, d6 = np.dot(ab, cp), np.dot(ac, cp)
+    d5, d6 = _dot(ab, cp), _dot(ac, cp)
     if d6 >= 0.0 and d5 <= d6:
         return c
     vb = d5 * d2 - d1 * d6

@@ -8,7 +8,7 @@ issue asks for agreement to 1e-12 relative (max |a - b| / max |a| per field),
 particles matched by id (rank 0 writes them sorted by id). With rigid bodies the
 reaction series are compared too: each process sums the constraint impulses of the
 nodes it owns, so they differ by the order of the sums, relative to the largest
-reaction.
+reaction; so are the tools' (each process sums the forces on the particles it holds).
 """
 from __future__ import annotations
 
@@ -41,11 +41,18 @@ CASES = {
                      boundary_conditions=[{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.2}]),
     "contact-rigid": scene(RIGID_2D, contact={"model": "friction", "friction": 0.2}),
     "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
+    # tools (solver/tools.py): each process pushes its particles, the reactions are summed
+    "tools": scene(SCENE_2D, tools=[{"name": "roller", "geometry": {"type": "sphere", "center": [0.5, 0.5],
+                                                                    "radius": 0.16},
+                                     "velocity": [0.0, -0.5], "stiffness": 2.0, "friction": 0.3}]),
+    "tools-tlmpm": scene(TLMPM_2D, tools=[{"name": "cutter", "geometry": {"type": "polygon", "vertices": [
+        [0.42, 0.19], [0.5, 0.19], [0.5, 0.3]]}, "velocity": ["0.5 * t", -0.2], "stiffness": 1.0, "friction": 0.1}]),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
-        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2)]
+        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2),
+        ("tools", 2), ("tools-tlmpm", 2)]
 
 
 @pytest.fixture(scope="module")
