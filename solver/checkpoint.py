@@ -78,8 +78,8 @@ class Restart:
     particles: dict[str, np.ndarray]
     series: dict[str, np.ndarray]
     boundary_heat: float = 0.0   # heat in through heat_flux and convection faces (solver/thermal.py)
-    tool_work: float = 0.0       # the tools' work and how far they moved (solver/tools.py)
-    tool_displacement: np.ndarray | None = None
+    tool_work: float = 0.0       # the tools' work, and where they are (solver/tools.py's state())
+    tools: dict[str, np.ndarray] | None = None
 
 
 def checkpoint_path(out_dir: str | os.PathLike) -> Path:
@@ -126,6 +126,7 @@ class Checkpointer:
         particles = sim.domain.gather(sim.particles.arrays())   # all processes' particles, on rank 0
         heat = sim.thermal_series()   # (collective: every process sums its boundary heat)
         tool_work = float(sim.domain.sum([sim.tool_work])[0])   # (collective: each counts its particles)
+        tools = sim.tools.state() if sim.tools is not None else None   # (collective too)
         self.last_step, self.last_time = sim.step_count, time.monotonic()
         if particles is None:
             return
@@ -138,8 +139,8 @@ class Checkpointer:
                                 boundary_work=sim.boundary_work, damping_work=sim.damping_work,
                                 **({"boundary_heat": heat["boundary_heat"]} if heat else {}),
                                 tool_work=tool_work)
-                if sim.tools is not None:
-                    h5.create_dataset("tools/displacement", data=sim.tools.displacement)
+                for name, values in (tools or {}).items():
+                    h5.create_dataset(f"tools/{name}", data=values)
                 for name, array in particles.items():
                     h5.create_dataset(f"particles/{name}", data=array)
                 for name, values in self.writer.series().items():
@@ -187,7 +188,7 @@ def load(out_dir: Path, scene) -> Restart | None:
                 raise OSError(f"not a checkpoint of format {FORMAT} {FORMAT_VERSION}")
             particles = _read_group(h5["particles"])
             series = _read_group(h5["series"]) if "series" in h5 else {}
-            tools = h5["tools/displacement"][()] if "tools" in h5 else None
+            tools = _read_group(h5["tools"]) if "tools" in h5 else None
     except (OSError, KeyError) as exc:
         log.warning("checkpoint %s unreadable (%s): starting from the beginning", path, exc)
         return None
@@ -199,7 +200,7 @@ def load(out_dir: Path, scene) -> Restart | None:
                       boundary_work=float(attrs["boundary_work"]),
                       damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series,
                       boundary_heat=float(attrs.get("boundary_heat", 0.0)),
-                      tool_work=float(attrs.get("tool_work", 0.0)), tool_displacement=tools)
+                      tool_work=float(attrs.get("tool_work", 0.0)), tools=tools)
     source = _result_to_continue(Path(out_dir))
     try:
         complete = len(list_frames(source)) if source else 0
@@ -244,8 +245,8 @@ def _restore(sim, restart: Restart) -> None:
     sim.external_work, sim.boundary_work = restart.external_work, restart.boundary_work
     sim.damping_work = restart.damping_work
     sim.tool_work = restart.tool_work if sim.domain.is_root else 0.0   # (one process keeps the total)
-    if sim.tools is not None and restart.tool_displacement is not None:
-        sim.tools.displacement[:] = restart.tool_displacement
+    if sim.tools is not None and restart.tools is not None:
+        sim.tools.restore(restart.tools, sim.domain.is_root)
     if sim.conduction is not None:   # the total, kept by one process (the series sums them)
         sim.conduction.boundary_heat = restart.boundary_heat if sim.domain.is_root else 0.0
 

@@ -17,7 +17,7 @@ import pytest
 
 from solver import run, runner
 from solver.checkpoint import CHECKPOINT_FILE, CheckpointError
-from solver.results import list_frames
+from solver.results import list_frames, read_series
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from same_result import assert_same_result  # noqa: E402
@@ -218,3 +218,21 @@ def test_a_conducting_run_resumes_to_the_same_temperatures_and_boundary_heat(tmp
     resumed = run(scene, tmp_path / "resumed", resume=True)
     assert resumed.steps == reference.steps
     assert_same_result(reference.result_path, resumed.result_path)
+
+
+def test_a_run_with_a_tool_resumes_to_the_same_result(tmp_path, monkeypatch):
+    """A tool's displacement, its reaction impulses since the last row and its work are
+    carried by the checkpoint (solver/tools.py): the resumed run's frames and series
+    (reaction_press_<axis>, tool_work) are the uninterrupted run's."""
+    scene = column()
+    scene["tools"] = [{"name": "press", "geometry": {"type": "box", "lower": [0.25, 0.29], "upper": [0.35, 0.4]},
+                       "velocity": [0.0, "-0.2 * t"], "stiffness": 2.0, "friction": 0.2}]
+    reference = run(scene, tmp_path / "reference")
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    stopped = run(scene, tmp_path / "cut", should_stop=stop_after(41))
+    assert stopped.reason == "cancelled"
+    resumed = run(scene, tmp_path / "cut", resume=True)
+    assert resumed.steps == reference.steps
+    assert_same_result(reference.result_path, resumed.result_path)
+    series = read_series(reference.result_path)
+    assert series["reaction_press_y"].max() > 0 and series["tool_work"][-1] != 0   # the tool did push
