@@ -185,11 +185,17 @@ def finish_outputs(out_dir: str | os.PathLike, scene: Any) -> Path | None:
 
 
 def _extent(scene: dict[str, Any], position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The grid box, or (no grid box: tlmpm may leave it out) the particles' bounding box with a margin."""
+    """The grid box, or (no grid box: tlmpm may leave it out) the particles' bounding box with a
+    margin; in tlmpm the grid box is the reference configuration, which the particles may leave
+    (a machined chip): then the box is widened to them."""
     grid = scene.get("grid")
-    if grid and grid.get("lower") is not None and grid.get("upper") is not None:
-        return np.asarray(grid["lower"], dtype=float), np.asarray(grid["upper"], dtype=float)
     finite = position[np.all(np.isfinite(position), axis=1)]
+    has_box = bool(grid) and grid.get("lower") is not None and grid.get("upper") is not None
+    if has_box:
+        lower, upper = np.asarray(grid["lower"], dtype=float), np.asarray(grid["upper"], dtype=float)
+        if len(finite) == 0 or (np.all(finite >= lower) and np.all(finite <= upper)):
+            return lower, upper
+        return np.minimum(lower, finite.min(axis=0)), np.maximum(upper, finite.max(axis=0))
     if len(finite) == 0:
         return np.zeros(position.shape[1]), np.ones(position.shape[1])
     lower, upper = finite.min(axis=0), finite.max(axis=0)
@@ -205,7 +211,7 @@ def _particle_spacing(
     if not grid or count == 0:
         volume = float(np.prod(upper - lower))
         return np.full(count, (volume / max(count, 1)) ** (1.0 / len(lower)))
-    cell = float(np.min(grid["cell_size"]))
+    cell = float(np.max(grid["cell_size"]))   # cells of unequal sides: no gaps between the rows
     per_body = np.array(
         [cell / float(np.max(b.get("particles_per_cell") or 1)) for b in scene.get("bodies", [])]
         or [cell]
