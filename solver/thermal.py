@@ -18,8 +18,10 @@ term Q^ext = sum_p V_p gamma* phi_I of line 5 (m c dT_p = V gamma* dt). With the
 axisymmetric ring weighting of masses and volumes, the weak form's sum V_p q_p .
 grad phi_I is the axisymmetric conduction operator, the radial term included.
 
-Conduction needs the stored stencil (the general backend: fused.supports refuses a
-conducting scene). Per-particle state lives in Particles.extra so that migration
+The particle passes (P2G; T_p and the remap's scatter; the flux gather) run here on the
+general backend's stored stencil; on the fused backend (MUSL scenes, solver/fused_scope.py)
+they ride inside its P2G, REMAP and KINEMATICS kernels and this hook keeps the node
+passes (`carries_conduction`). Per-particle state lives in Particles.extra so that migration
 and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity.
 """
 from __future__ import annotations
@@ -220,11 +222,12 @@ class Conduction:
         self._faces.set_time(sim.time)
 
     def after_forces(self, sim) -> None:
-        p, s = sim.particles, sim.stencil
-        x = p.extra
-        self.heat.fill(0.0)
-        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], p.volume,
-                            x["heat_flux"], self.heat, self.copies_heat)
+        if not sim.phases.carries_conduction:   # (the fused P2G added C_I, (C T)_I, Q_I already)
+            p, s = sim.particles, sim.stencil
+            x = p.extra
+            self.heat.fill(0.0)
+            thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], p.volume,
+                                x["heat_flux"], self.heat, self.copies_heat)
         sim.domain.sum_ghosts(self.heat)
 
     def before_update(self, sim, dt: float) -> None:
@@ -238,17 +241,22 @@ class Conduction:
         sim.domain.share_nodes(self.T_old, self.T_new)
 
     def after_g2p(self, sim, dt: float) -> None:
+        """Lines 12-15. On the fused backend the REMAP pass did line 12 and the scatter of 13,
+        and its KINEMATICS pass, next, gathers q_p (line 15): only the node passes are left here."""
         p, s = sim.particles, sim.stencil
         x = p.extra
-        self.remapped.fill(0.0)
-        thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
-                                  x["temperature"], self.remapped, self.copies_remapped)
+        fused = sim.phases.carries_conduction
+        if not fused:
+            self.remapped.fill(0.0)
+            thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
+                                      x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
         thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new)
         thermal_kernels.hold(self.held.node, self.held.value, self.T_new)
         sim.domain.share_nodes(self.T_new)
-        thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
-                                      sim.threads)
+        if not fused:
+            thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
+                                          sim.threads)
 
     def grid_temperature(self) -> np.ndarray:
         """T_I^{t+dt} of the last step (the remapped, smooth one [R] plots), on this process's nodes."""

@@ -26,6 +26,8 @@ from solver import kernels
 class Phases:
     """The phases of one simulation's step; `sim` holds the state (solver/stepper.py)."""
 
+    carries_conduction = False   # whether the backend's kernels do conduction's particle passes (fused)
+
     def __init__(self, sim):
         self.sim = sim
         self.acceleration = None   # the body acceleration of this step, for the loads' work

@@ -122,3 +122,75 @@ def test_a_particle_leaving_the_grid_is_named_by_the_fused_step():
     with pytest.raises(Exception, match="position of particle"):
         for _ in range(5):
             sim.advance(2e-4)
+
+
+# -- heat conduction carried by the fused kernels (MUSL) ------------------------------
+
+HEAT = {"thermal_conductivity": 2.0e5, "specific_heat": 500.0}
+
+
+def conducting(dimension: int, method: str, threads: int) -> dict:
+    """The two bodies of SCENE_2D/3D, the left a box that conducts, held at 400 K near x = 0,
+    the right without thermal keys (it takes no part in conduction)."""
+    scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
+    scene["materials"] = {"m": {**scene["materials"]["m"], **HEAT}, "cold": scene["materials"]["m"]}
+    left, right = scene["bodies"]
+    left["initial_temperature"] = 300.0
+    left["geometry"] = {"type": "box", "lower": [0.05] + right["geometry"]["lower"][1:],
+                        "upper": [0.45] + right["geometry"]["upper"][1:]}
+    right["material"] = "cold"
+    upper = scene["grid"]["upper"]
+    scene["boundary_conditions"].append({"type": "temperature", "temperature": 400.0,
+                                         "where": {"type": "box", "lower": [0.0] * dimension,
+                                                   "upper": [0.13] + upper[1:]}})
+    return {**scene, "method": METHODS[method], "parallel": {"threads": threads},
+            "time": {**scene["time"], "dt": 1e-4}}
+
+
+@pytest.mark.parametrize("dimension,method,threads", [
+    (2, "musl-linear-flip", 1), (2, "musl-linear-flip", 2), (3, "musl-linear-flip", 2),
+    (2, "musl-quadratic-mls", 2), (3, "musl-quadratic-apic", 1)])
+def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, threads):
+    """The thermal kernels do thermal_kernels.py's sums in the same order on the same weights.
+    In 2D the weights are the same bits, so after one step from the same state T_p and q_p
+    are too; in 3D the fused weight wx (wy wz) and the stored ((wx wy) wz) differ in the last
+    bit. Over 60 steps the mechanics' round-off (see the module docstring) reaches the
+    temperatures through x_p and V_p: 1e-12 relative, as for the mechanics."""
+    scene = load_scene(conducting(dimension, method, threads))
+    fast, general = ExplicitMPM(scene), ExplicitMPM(scene, general=True)
+    assert fast.fused and not general.fused
+    a, b = fast.particles.extra, general.particles.extra
+    cold = general.particles.body == 1
+    start = b["temperature"][cold].copy()
+    fast.advance(1e-4)
+    general.advance(1e-4)
+    for name in ("temperature", "heat_flux"):
+        if dimension == 2:
+            assert np.array_equal(a[name], b[name]), name
+        assert relative_difference(a[name], b[name]) <= TOLERANCE, name
+    for _ in range(STEPS - 1):
+        fast.advance(1e-4)
+        general.advance(1e-4)
+    T = b["temperature"]
+    assert np.ptp(T[general.particles.body == 0]) > 10.0   # the heat did spread into the body
+    assert np.array_equal(T[cold], start) and np.array_equal(a["temperature"][fast.particles.body == 1], start)
+    for name in ("temperature", "heat_flux"):
+        assert relative_difference(a[name], b[name]) <= TOLERANCE, name
+    assert relative_difference(fast.conduction.grid_temperature(), general.conduction.grid_temperature()) <= TOLERANCE
+    assert relative_difference(fast.particles.x, general.particles.x) <= TOLERANCE
+
+
+def test_conduction_with_usl_keeps_the_general_backend():
+    """USL's one fused G2P pass moves x_p before the flux could be gathered at x_p^t."""
+    scene = conducting(2, "usl-linear-pic", 1)
+    assert not fused.supports(load_scene(scene))
+    assert fused.supports(load_scene({**scene, "method": METHODS["musl-linear-flip"]}))
+
+
+def test_a_scene_without_heat_loads_the_kernels_of_a_template_without_heat():
+    """Conduction adds to the generated text only where the scene conducts."""
+    for dimension in (2, 3):
+        plain, thermal = fused_template.source(dimension), fused_template.source(dimension, thermal=True)
+        assert "capacity" not in plain and "heat" not in plain
+        assert "heat_flux" in thermal
+    assert ExplicitMPM(load_scene(SCENE_2D)).phases._kernels is fused.kernels(2)
