@@ -154,7 +154,7 @@ def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, t
     """The thermal kernels do thermal_kernels.py's sums in the same order on the same weights.
     In 2D the weights are the same bits, so after one step from the same state T_p and q_p
     are too; in 3D the fused weight wx (wy wz) and the stored ((wx wy) wz) differ in the last
-    bit. Over 60 steps the mechanics' round-off (see the module docstring) reaches the
+    bit, and MLS's gradient takes D_p = h^2/4 exactly where the general one sums it. Over 60 steps the mechanics' round-off (see the module docstring) reaches the
     temperatures through x_p and V_p: 1e-12 relative, as for the mechanics."""
     scene = load_scene(conducting(dimension, method, threads))
     fast, general = ExplicitMPM(scene), ExplicitMPM(scene, general=True)
@@ -165,7 +165,7 @@ def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, t
     fast.advance(1e-4)
     general.advance(1e-4)
     for name in ("temperature", "heat_flux"):
-        if dimension == 2:
+        if dimension == 2 and METHODS[method]["transfer"] != "mls":
             assert np.array_equal(a[name], b[name]), name
         assert relative_difference(a[name], b[name]) <= TOLERANCE, name
     for _ in range(STEPS - 1):
