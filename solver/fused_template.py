@@ -176,14 +176,13 @@ def _heat_p2g_node(dim: int) -> list[str]:
     gradient the general backend's stencil holds (MLS: w D_p^-1 (x_I - x_p); here dw is
     w (x_I - x_p), D_p^-1 being in s)."""
     return [
-        "if conducting:",
-        "    if mls:",
-        *_indent(_each_line("tg{c} = dw{c} * d_inv{a}", dim), 2),
-        "    else:",
-        f"        {_each('tg{c}', dim)} = {_each('dw{c}', dim)}",
-        "    " + _scatter("th", "node, 0", "+=", "w * mcap"),
-        "    " + _scatter("th", "node, 1", "+=", "w * mct"),
-        "    " + _scatter("th", "node, 2", "+=", f"vol * (0.0 + {_each('q{c} * tg{c}', dim, ' + ')})"),
+        "if mls:",
+        *_indent(_each_line("tg{c} = dw{c} * d_inv{a}", dim), 1),
+        "else:",
+        f"    {_each('tg{c}', dim)} = {_each('dw{c}', dim)}",
+        _scatter("th", "node, 0", "+=", "w * mcap"),
+        _scatter("th", "node, 1", "+=", "w * mct"),
+        _scatter("th", "node, 2", "+=", f"vol * (0.0 + {_each('q{c} * tg{c}', dim, ' + ')})"),
     ]
 
 
@@ -207,9 +206,8 @@ def _p2g_particle(dim: int, thermal: bool) -> list[str]:
         _zeros(mc) + "   # m_p C_p (C holds one placeholder row without APIC)",
         "if affine:",
         *_indent(_tensor("mc{a}{b} = m * C[p, {a}, {b}]", dim), 1),
-        *(["mcap = m * capacity[p]",
-           "conducting = mcap != 0.0   # a material without conduction adds nothing (as thermal_kernels.p2g)",
-           "mct = mcap * T[p]",
+        *(["mcap = m * capacity[p]   # 0 for a material without conduction: it adds zeros (the general",
+           "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
            f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
         *_stencil(dim, _p2g_node(dim, thermal), gradients=True),
     ]
@@ -289,12 +287,10 @@ def _g2p_remap(dim: int, thermal: bool) -> list[str]:
         "    dx = (i - fx) * h[0]",
         *[f"    p{AXES[a]} += {_each(f'C[p, {a}, {{a}}] * d{{c}}', dim, ' + ')}" for a in range(dim)],
         *[_scatter("gp", f"node, {a}", "+=", f"mw * p{AXES[a]}") for a in range(dim)],
-        *(["if conducting:", "    " + _scatter("tr", "node", "+=", f"(wx[i] * {_outer(dim)}) * mct")]
-          if thermal else []),
+        *([_scatter("tr", "node", "+=", f"(wx[i] * {_outer(dim)}) * mct")] if thermal else []),
     ]
     heat = ["    mcap = m * capacity[p]",
-            "    conducting = mcap != 0.0   # a material without conduction keeps its T_p",
-            "    if conducting:",
+            "    if mcap != 0.0:   # a material without conduction keeps its T_p (and maps back zeros)",
             "        T[p] += dT",
             "    mct = mcap * T[p]"]
     return [
