@@ -1,15 +1,22 @@
 """Heat: the cost of conduction in a step, and the errors and times of the heat
 verification cases (the "Heat" section of docs/benchmarks.md).
 
-    python benchmarks/heat.py [--steps 20] [--repeats 5] [--skip-cases]
+    python benchmarks/heat.py [--steps 10] [--repeats 7] [--threads 1,2] [--skip-cases]
 
 Cost: one 2D and one 3D scene (an elastic block, MUSL, linear hats, 58k and 111k
-particles), stepped with and without heat (conduction, a held face, expansion; the
-same scene without the thermal keys) in the same process, interleaved, best of
-`repeats` runs of `steps` steps each. Conduction reads the general backend's stored
-stencil, so a conducting scene steps with it: the ratio to the same scene on the
-general backend is the cost of the thermal phases; the ratio to the fused backend
-(where the scene without heat runs) is what a user sees.
+particles), stepped in the same process, interleaved (the machine's load falls on
+all alike), `repeats` runs of `steps` steps each, for each thread count:
+
+    no heat            the scene without thermal keys (fused backend)
+    conduction         the same scene with conduction and a held face (fused: the
+                       temperature rides in the fused P2G, REMAP and KINEMATICS passes)
+    cond. + expansion  and thermal expansion
+    separate passes    conduction + expansion on the general backend, the thermal
+                       particle passes apart (solver/thermal_kernels.py): the step before
+                       conduction was fused
+
+Ratios are medians of the per-repeat ratios (each repeat runs every variant once,
+back to back), with their range.
 
 Cases: tests/verification/heat_cases.py (E12 with refinement and [R]'s dt = 8e-5,
 E13, the boundary heat balance, the axisymmetric tube, thermal expansion).
@@ -36,10 +43,12 @@ from solver.stepper import ExplicitMPM  # noqa: E402
 THERMAL = {"thermal_conductivity": 50.0, "specific_heat": 500.0, "thermal_expansion": 1.0e-5}
 
 
-def block(dim: int, cell: float, heat: bool, threads: int = 0) -> dict:
+def block(dim: int, cell: float, heat: bool, threads: int = 0, expansion: bool = True) -> dict:
     material = {"model": "linear_elastic", "density": 8000.0, "youngs_modulus": 2.0e11, "poisson_ratio": 0.3}
     if heat:
         material.update(THERMAL)
+        if not expansion:
+            del material["thermal_expansion"]
     return {"dimension": dim, "method": {"scheme": "musl"},
             "grid": {"lower": [0.0] * dim, "upper": [1.0] * dim, "cell_size": cell},
             "materials": {"steel": material},
@@ -58,38 +67,49 @@ def seconds_per_step(sim: ExplicitMPM, steps: int) -> float:
     return (time.perf_counter() - start) / steps
 
 
+VARIANTS = ("no heat", "conduction", "cond. + expansion", "separate passes")
+
+
+def simulations(dim: int, cell: float, threads: int) -> dict[str, ExplicitMPM]:
+    sims = {"no heat": ExplicitMPM(load_scene(block(dim, cell, False, threads))),
+            "conduction": ExplicitMPM(load_scene(block(dim, cell, True, threads, expansion=False))),
+            "cond. + expansion": ExplicitMPM(load_scene(block(dim, cell, True, threads))),
+            "separate passes": ExplicitMPM(load_scene(block(dim, cell, True, threads)), general=True)}
+    assert [sim.fused for sim in sims.values()] == [True, True, True, False]
+    return sims
+
+
 def step_costs(dim: int, cell: float, steps: int, repeats: int, threads: int):
-    sims = {"fused, no heat": ExplicitMPM(load_scene(block(dim, cell, False, threads))),
-            "general, no heat": ExplicitMPM(load_scene(block(dim, cell, False, threads)), general=True),
-            "conduction + expansion": ExplicitMPM(load_scene(block(dim, cell, True, threads)))}
+    sims = simulations(dim, cell, threads)
     for sim in sims.values():   # compile
         seconds_per_step(sim, 2)
     times = {name: [] for name in sims}
     for _ in range(repeats):   # interleaved: the machine's load falls on all alike
         for name, sim in sims.items():
             times[name].append(seconds_per_step(sim, steps))
-    return times, sims["fused, no heat"].particles.count
+    return times, sims["no heat"].particles.count
 
 
 def _ratio(times, heat: str, base: str) -> str:
-    """best over best, and the spread of the per-repeat ratios"""
+    """median of the per-repeat ratios (range)"""
     ratios = [h / b for h, b in zip(times[heat], times[base])]
-    return f"{min(times[heat]) / min(times[base]):.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
+    return f"{np.median(ratios):.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
 
 
-def cost_table(steps: int, repeats: int, threads: int) -> None:
-    print(f"threads: {threads or 'default'}; ms per step, best of {repeats} x {steps} steps; ratios: best over "
-          "best (spread of the per-repeat ratios)")
-    print("| scene | particles | no heat, fused | no heat, general | heat (general) | "
-          "heat / no heat, general | heat / no heat, fused |")
-    print("|---|---|---|---|---|---|---|")
-    for dim, cell in ((2, 0.005), (3, 0.025)):
-        times, particles = step_costs(dim, cell, steps, repeats, threads)
-        best = {name: 1e3 * min(t) for name, t in times.items()}
-        print(f"| {dim}D block, MUSL, linear | {particles} | {best['fused, no heat']:.1f} | "
-              f"{best['general, no heat']:.1f} | {best['conduction + expansion']:.1f} | "
-              f"{_ratio(times, 'conduction + expansion', 'general, no heat')} | "
-              f"{_ratio(times, 'conduction + expansion', 'fused, no heat')} |")
+def cost_table(steps: int, repeats: int, thread_counts: list[int]) -> None:
+    print(f"ms per step: median of {repeats} x {steps} steps (range); ratios to 'no heat': median of the "
+          "per-repeat ratios (range)")
+    print("| threads | scene | particles | " + " | ".join(f"{v} (ms)" for v in VARIANTS) + " | "
+          + " | ".join(f"{v} / no heat" for v in VARIANTS[1:]) + " |")
+    print("|---" * (3 + 2 * len(VARIANTS) - 1) + "|")
+    for threads in thread_counts:
+        for dim, cell in ((2, 0.005), (3, 0.025)):
+            times, particles = step_costs(dim, cell, steps, repeats, threads)
+            ms = [f"{1e3 * np.median(times[v]):.1f} ({1e3 * min(times[v]):.1f}-{1e3 * max(times[v]):.1f})"
+                  for v in VARIANTS]
+            ratios = [_ratio(times, v, "no heat") for v in VARIANTS[1:]]
+            print(f"| {threads} | {dim}D block, MUSL, linear | {particles} | " + " | ".join(ms + ratios) + " |",
+                  flush=True)
 
 
 def timed(function, *args, **kwargs):
@@ -147,12 +167,12 @@ def case_table() -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--steps", type=int, default=20)
-    parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--threads", type=int, default=0, help="0: the default count")
+    parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--threads", default="1,2", help="thread counts, comma-separated (0: the default count)")
     parser.add_argument("--skip-cases", action="store_true")
     args = parser.parse_args()
-    cost_table(args.steps, args.repeats, args.threads)
+    cost_table(args.steps, args.repeats, [int(t) for t in args.threads.split(",")])
     if not args.skip_cases:
         print()
         case_table()

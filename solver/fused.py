@@ -57,11 +57,12 @@ USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docs
 
 
 @functools.cache
-def kernels(dim: int):
+def kernels(dim: int, thermal: bool = False):
     """The module of the fused kernels for `dim` dimensions: `p2g` and `g2p`
-    (generated from solver/fused_template.py, see there)."""
+    (generated from solver/fused_template.py, see there); with `thermal` the kernels that
+    carry heat conduction as well (a separate module: scenes without it keep theirs)."""
     from solver import fused_template
-    return fused_template.load(dim)
+    return fused_template.load(dim, thermal)
 
 
 _CONSTANTS = [np.empty((0,) * n) for n in range(1, 5)]

@@ -148,9 +148,10 @@ def _axes(dim: int, ok: bool) -> list[str]:
 
 # -- P2G ---------------------------------------------------------------------------
 
-def _p2g_node(dim: int) -> list[str]:
+def _p2g_node(dim: int, thermal: bool) -> list[str]:
     """What one particle adds to one node: mass, momentum (APIC term), force; `fold`:
-    mass and q = mv + dt f only (the force is in mv and mc, `_p2g_particle`)."""
+    mass and q = mv + dt f only (the force is in mv and mc, `_p2g_particle`); with
+    `thermal` the conduction's C_I, (C T)_I, Q_I (`_heat_p2g_node`; never folded)."""
     def force(a):
         return _each(f"s{a}{{a}} * dw{{c}}", dim, " - ")
     return [
@@ -174,10 +175,27 @@ def _p2g_node(dim: int) -> list[str]:
         *[f"    {_scatter('gf', f'node, {a}', '+=', f'w * mb{AXES[a]} - {force(a)}')}" for a in range(dim)],
         "else:",
         *[f"    {_scatter('gf', f'node, {a}', '-=', force(a).replace(' - ', ' + '))}" for a in range(dim)],
+        *(_heat_p2g_node(dim) if thermal else []),
     ]
 
 
-def _p2g_particle(dim: int) -> list[str]:
+def _heat_p2g_node(dim: int) -> list[str]:
+    """Conduction's P2G (Algorithm 8, lines 3-7) as solver/thermal_kernels.py's `p2g` does it:
+    C_I += w m c, (C T)_I += w m c T, Q_I += V (0 + q_0 dw_0 + q_1 dw_1 ...) with the
+    gradient the general backend's stencil holds (MLS: w D_p^-1 (x_I - x_p); here dw is
+    w (x_I - x_p), D_p^-1 being in s)."""
+    return [
+        "if mls:",
+        *_indent(_each_line("tg{c} = dw{c} * d_inv{a}", dim), 1),
+        "else:",
+        f"    {_each('tg{c}', dim)} = {_each('dw{c}', dim)}",
+        _scatter("th", "node, 0", "+=", "w * mcap"),
+        _scatter("th", "node, 1", "+=", "w * mct"),
+        _scatter("th", "node, 2", "+=", f"vol * (0.0 + {_each('q{c} * tg{c}', dim, ' + ')})"),
+    ]
+
+
+def _p2g_particle(dim: int, thermal: bool) -> list[str]:
     mc = [f"mc{a}{b}" for a in range(dim) for b in range(dim)]
     return [
         *_axes(dim, ok=True),
@@ -202,21 +220,26 @@ def _p2g_particle(dim: int) -> list[str]:
         *_indent(_tensor("mc{a}{b} = m * C[p, {a}, {b}]", dim), 1),
         "if fold:",
         *_indent(_tensor("mc{a}{b} = mc{a}{b} - s{a}{b}", dim), 1),
-        *_stencil(dim, _p2g_node(dim), gradients=True),
+        *(["mcap = m * capacity[p]   # 0 for a material without conduction: it adds zeros (the general",
+           "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
+           f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
+        *_stencil(dim, _p2g_node(dim, thermal), gradients=True),
     ]
 
 
-def _p2g(dim: int) -> list[str]:
+def _p2g(dim: int, thermal: bool) -> list[str]:
     return _shell(
         "p2g(variant, x, v, C, mass, volume, stress, acc, frame, d_inv, grid_mass, grid_mom, grid_force,\n"
-        "        copies_mass, copies_mom, copies_force, bad, dt)",
+        "        copies_mass, copies_mom, copies_force, bad, dt"
+        + (",\n        capacity, T, heat_flux, heat, copies_heat)" if thermal else ")"),
         "m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =\n"
         "    sum_p m_p w b_p - V_p sigma_p grad w (MLS: w D_p^-1 (x_I - x_p) for grad w). bad[t]: first\n"
         "    particle of block t outside the grid. `fold` (MLS only): f_I is not formed, dt f_I is\n"
         "    added into (mv)_I instead (grid_force untouched).\n\n"
         "    variant: (support, affine, loaded, mls, fold) constants; frame: (lower, h, inv_h, cells,\n"
         "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
-        "    the other threads.",
+        "    the other threads."
+        + ("\n\n    Conduction: heat (n, 3) gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p." if thermal else ""),
         ["support, affine_, loaded_, mls_, fold_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
@@ -226,18 +249,21 @@ def _p2g(dim: int) -> list[str]:
          "   # compile-time constants",
          "fold = fold_.ndim == 2",
          "gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
-         "gf = grid_force if fold else own(t, grid_force, copies_force)"],
-        _p2g_particle(dim),
+         "gf = grid_force if fold else own(t, grid_force, copies_force)",
+         *(["th = own(t, heat, copies_heat)"] if thermal else [])],
+        _p2g_particle(dim, thermal),
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
          "else:",
-         "    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"])
+         "    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)",
+         *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])])
 
 
 # -- G2P ---------------------------------------------------------------------------
 
-def _g2p_gather(dim: int) -> list[str]:
-    """What one node gives one particle: v_pic, the FLIP increment, B_p, L_p."""
+def _g2p_gather(dim: int, thermal: bool) -> list[str]:
+    """What one node gives one particle: v_pic, the FLIP increment, B_p, L_p (and with
+    `thermal` the conduction's gathers: `_heat_g2p_gather`)."""
     return [
         f"w = wx[i] * {_outer(dim)}",
         f"{_each('v{c}', dim)} = {_each('v_new[node, {a}]', dim)}",
@@ -251,11 +277,28 @@ def _g2p_gather(dim: int) -> list[str]:
         "if mode != REMAP and not mls:",
         *_indent(_gradient(dim), 1),
         *[f"    l{a}{b} += v{AXES[a]} * dw{AXES[b]}" for a in range(dim) for b in range(dim)],
+        *(_heat_g2p_gather(dim) if thermal else []),
     ]
 
 
-def _g2p_remap(dim: int) -> list[str]:
-    """MUSL: the particle's new momentum m w (v_p + C_p (x_I - x_p)) back to the grid."""
+def _heat_g2p_gather(dim: int) -> list[str]:
+    """Conduction's gathers, in the order of solver/thermal_kernels.py's sums: the REMAP pass
+    takes dT_p = sum w (T~_I - T_I) (Algorithm 8, line 12); the KINEMATICS pass, which runs
+    after the remapped T_I^{t+dt} was formed and still has x_p^t, the flux's sum grad w T_I
+    (line 15; MLS: its gradient w D_p^-1 (x_I - x_p), as the general stencil holds it)."""
+    return [
+        "if mode == REMAP:",
+        "    dT += w * (T_grid[node] - T_old[node])",
+        "if mode == KINEMATICS and kp != 0.0:",
+        "    if mls:",
+        *_indent(_each_line("dw{c} = w * d{c} * d_inv{a}", dim), 2),
+        *_indent(_each_line("tq{c} += dw{c} * T_grid[node]", dim), 1),
+    ]
+
+
+def _g2p_remap(dim: int, thermal: bool) -> list[str]:
+    """MUSL: the particle's new momentum m w (v_p + C_p (x_I - x_p)) back to the grid (with
+    `thermal`: T_p += dT_p, and w m c T_p into `remapped`, Algorithm 8 lines 12-13)."""
     node = [
         f"mw = m * (wx[i] * {_outer(dim)})",
         f"{_each('p{c}', dim)} = {_each('v[p, {a}]', dim)}",
@@ -263,11 +306,17 @@ def _g2p_remap(dim: int) -> list[str]:
         "    dx = (i - fx) * h[0]",
         *[f"    p{AXES[a]} += {_each(f'C[p, {a}, {{a}}] * d{{c}}', dim, ' + ')}" for a in range(dim)],
         *[_scatter("gp", f"node, {a}", "+=", f"mw * p{AXES[a]}") for a in range(dim)],
+        *([_scatter("tr", "node", "+=", f"(wx[i] * {_outer(dim)}) * mct")] if thermal else []),
     ]
+    heat = ["    mcap = m * capacity[p]",
+            "    if mcap != 0.0:   # a material without conduction keeps its T_p (and maps back zeros)",
+            "        T[p] += dT",
+            "    mct = mcap * T[p]"]
     return [
         "if mode == REMAP:",
         f"    {_each('rate[p, {a}]', dim)} = {_each('vp{c}', dim)}",
         "    m = mass[p]",
+        *(heat if thermal else []),
         *_indent(_stencil(dim, node, gradients=False), 1),
         "    continue",
     ]
@@ -294,14 +343,15 @@ def _determinant(rows: list[int], columns: list[int]) -> str:
     return text
 
 
-def _g2p_particle(dim: int) -> list[str]:
+def _g2p_particle(dim: int, thermal: bool) -> list[str]:
     matrix = [f"{{}}{a}{b}" for a in range(dim) for b in range(dim)]
     return [
         *_axes(dim, ok=False),
         _zeros([f"vp{c}" for c in AXES[:dim]] + [f"dv{c}" for c in AXES[:dim]]),
         _zeros([m.format("b") for m in matrix]),
         _zeros([m.format("l") for m in matrix]),
-        *_stencil(dim, _g2p_gather(dim), gradients=True),
+        *([_zeros(["dT"] + [f"tq{c}" for c in AXES[:dim]]), "kp = conductivity[p]"] if thermal else []),
+        *_stencil(dim, _g2p_gather(dim, thermal), gradients=True),
         "if mode != KINEMATICS:",
         "    if blend:",
         *_indent(_each_line("v[p, {a}] = flip * (v[p, {a}] + dv{c}) + (1.0 - flip) * vp{c}", dim), 2),
@@ -309,7 +359,9 @@ def _g2p_particle(dim: int) -> list[str]:
         f"        {_each('v[p, {a}]', dim)} = {_each('vp{c}', dim)}",
         "    if affine:",
         *_indent(_tensor("C[p, {a}, {b}] = b{a}{b} * d_inv{b}", dim), 2),
-        *_g2p_remap(dim),
+        *_g2p_remap(dim, thermal),
+        *(["if mode == KINEMATICS:   # q_p = -k_p sum grad w T_I^{t+dt}",
+           *_indent(_each_line("heat_flux[p, {a}] = -kp * tq{c}", dim), 1)] if thermal else []),
         "if mode == USL:",
         *_indent(_each_line("x[p, {a}] += dt * vp{c}", dim), 1),
         "else:",
@@ -325,17 +377,22 @@ def _g2p_particle(dim: int) -> list[str]:
     ]
 
 
-def _g2p(dim: int) -> list[str]:
+def _g2p(dim: int, thermal: bool) -> list[str]:
     return _shell(
         "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
-        "        flip, dt, d_inv, copies_mom, bad)",
+        "        flip, dt, d_inv, copies_mom, bad"
+        + (",\n        capacity, T, conductivity, heat_flux, T_old, T_grid, remapped, copies_remapped)"
+           if thermal else ")"),
         "USL: v_p (PIC/FLIP blend), C_p = B_p D_p^-1, x_p += dt v_pic, and L_p, F_p, V_p\n"
         "    from v_new. REMAP: v_p and C_p only, v_pic into `rate`, and the new momentum\n"
         "    m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:\n"
         "    L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.\n"
         "    bad[t]: first particle of block t whose J = det F is not positive.\n\n"
         "    variant: (support, mode, affine, blend, mls) constants; frame: (lower, h, inv_h, cells,\n"
-        "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS).",
+        "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS)."
+        + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w (T_grid - T_old) and sum w m c T_p into\n"
+           "    `remapped` (zeroed by the caller); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
+           "    then being the remapped T_I^{t+dt}." if thermal else ""),
         ["support, mode_, affine_, blend_, mls_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          "threads = copies_mom.shape[0] + 1",
@@ -344,24 +401,33 @@ def _g2p(dim: int) -> list[str]:
         ["S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2"
          "   # compile-time constants",
          "mode = mode_.ndim - 1",
-         "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom"],
-        _g2p_particle(dim),
+         "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
+         *(["tr = own(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
+        _g2p_particle(dim, thermal),
         ["if remaps and copies_mom.shape[0] > 0:",
-         "    add_node_copies(grid_mom, copies_mom)"])
+         "    add_node_copies(grid_mom, copies_mom)",
+         *(["if remaps and copies_remapped.shape[0] > 0:", "    add_node_copies(remapped, copies_remapped)"]
+           if thermal else [])])
 
 
 # -- the generated module ------------------------------------------------------------
 
-def source(dim: int) -> str:
-    """The text of the module of the fused kernels for `dim` (2 or 3) dimensions."""
-    return "\n".join([HEADER.format(dim=dim), *_p2g(dim), *_g2p(dim)]) + "\n"
+def source(dim: int, thermal: bool = False) -> str:
+    """The text of the module of the fused kernels for `dim` (2 or 3) dimensions; with
+    `thermal`, the kernels that carry conduction too (a scene without it never loads them:
+    its module's text, and so its kernels, are those of a template without heat)."""
+    return "\n".join([HEADER.format(dim=dim), *_p2g(dim, thermal), *_g2p(dim, thermal)]) + "\n"
 
 
-def write(dim: int) -> Path:
+def _stem(dim: int, thermal: bool) -> str:
+    return f"fused_{dim}d" + ("_thermal" if thermal else "")
+
+
+def write(dim: int, thermal: bool = False) -> Path:
     """The generated file for `dim`, (re)written only when its text changed (solver/generated.py)."""
-    return generated.write("fused", f"fused_{dim}d", source(dim))
+    return generated.write("fused", _stem(dim, thermal), source(dim, thermal))
 
 
-def load(dim: int):
+def load(dim: int, thermal: bool = False):
     """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
-    return generated.load("fused", f"fused_{dim}d", source(dim))
+    return generated.load("fused", _stem(dim, thermal), source(dim, thermal))

@@ -18,8 +18,10 @@ term Q^ext = sum_p V_p gamma* phi_I of line 5 (m c dT_p = V gamma* dt). With the
 axisymmetric ring weighting of masses and volumes, the weak form's sum V_p q_p .
 grad phi_I is the axisymmetric conduction operator, the radial term included.
 
-Conduction needs the stored stencil (the general backend: fused.supports refuses a
-conducting scene). Per-particle state lives in Particles.extra so that migration
+The particle passes (P2G; T_p and the remap's scatter; the flux gather) run here on the
+general backend's stored stencil; on the fused backend (MUSL scenes, solver/fused_scope.py)
+they ride inside its P2G, REMAP and KINEMATICS kernels and this hook keeps the node
+passes (`carries_conduction`). Per-particle state lives in Particles.extra so that migration
 and checkpoints carry it: temperature, heat_flux, heat_capacity, conductivity (and
 in TLMPM nominal_heat_flux, J F^-1 q, which P2G takes with V0_p and grad0 phi_I(X_p)).
 
@@ -29,7 +31,8 @@ contact's nodes) their fields are in perfect thermal contact: one C-weighted tem
 which keeps sum C T (thermal_kernels.share_temperature). The frictional work of contact and
 frictional walls (sim.friction_heat, counted with friction_work on v~^{t+dt}) is known
 only after the grid update, so with contact or friction the held temperatures and the halo of T_I^t,
-T~_I^{t+dt} move to after_g2p, after that heat is deposited (thermal_kernels.deposit_heat).
+T~_I^{t+dt} move to after_g2p, after that heat is deposited (thermal_kernels.deposit_heat);
+such scenes are not fused (the fused REMAP pass would take T~ before the heat is in).
 """
 from __future__ import annotations
 
@@ -239,12 +242,13 @@ class Conduction:
         self._faces.set_time(sim.time)
 
     def after_forces(self, sim) -> None:
-        p, s = sim.particles, sim.stencil
-        x = p.extra
-        self.heat.fill(0.0)
-        volume, flux = (p.volume0, x["nominal_heat_flux"]) if self.reference else (p.volume, x["heat_flux"])
-        thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], volume,
-                            flux, self.heat, self.copies_heat)
+        if not sim.phases.carries_conduction:   # (the fused P2G added C_I, (C T)_I, Q_I already)
+            p, s = sim.particles, sim.stencil
+            x = p.extra
+            self.heat.fill(0.0)
+            volume, flux = (p.volume0, x["nominal_heat_flux"]) if self.reference else (p.volume, x["heat_flux"])
+            thermal_kernels.p2g(sim.spec, s.idx, s.w, s.dw, p.mass, x["heat_capacity"], x["temperature"], volume,
+                                flux, self.heat, self.copies_heat)
         sim.domain.sum_ghosts(self.heat)
 
     def before_update(self, sim, dt: float) -> None:
@@ -276,13 +280,17 @@ class Conduction:
         self._hold_and_share(sim)
 
     def after_g2p(self, sim, dt: float) -> None:
+        """Lines 12-15. On the fused backend the REMAP pass did line 12 and the scatter of 13,
+        and its KINEMATICS pass, next, gathers q_p (line 15): only the node passes are left here."""
         p, s = sim.particles, sim.stencil
         x = p.extra
-        if self.exchanges:
+        fused = sim.phases.carries_conduction
+        if self.exchanges:   # (never fused: solver/fused_scope.py)
             self._exchange(sim)
-        self.remapped.fill(0.0)
-        thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
-                                  x["temperature"], self.remapped, self.copies_remapped)
+        if not fused:
+            self.remapped.fill(0.0)
+            thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
+                                      x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
         thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new)
         if self.contact is not None:   # the flux at a contact node: from the touching fields' one temperature
@@ -292,7 +300,7 @@ class Conduction:
         if self.reference:
             thermal_kernels.reference_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], p.F,
                                            x["heat_flux"], x["nominal_heat_flux"], sim.threads)
-        else:
+        elif not fused:
             thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
                                           sim.threads)
 

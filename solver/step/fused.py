@@ -2,7 +2,12 @@
 stored (solver/fused.py), for the scenes most runs are (`supports`): ULMPM with
 linear hats or quadratic B-splines, USL or MUSL, PIC/FLIP/APIC, no hook that needs a
 stored stencil. USL's G2P and kinematics are one pass; MUSL's remap keeps v_pic
-(`rate`) until the kinematics pass moves x_p."""
+(`rate`) until the kinematics pass moves x_p.
+
+Heat conduction (MUSL only, fused_scope) rides in the same passes, in kernels generated
+for conducting scenes alone: P2G adds C_I, (C T)_I, Q_I; the REMAP pass updates T_p and
+maps m c T_p back; the KINEMATICS pass, after the conduction hook formed the remapped
+T_I^{t+dt}, gathers q_p. The hook (solver/thermal.py) keeps the node passes."""
 from __future__ import annotations
 
 import numpy as np
@@ -14,6 +19,7 @@ from solver.step.phases import Phases
 
 class FusedPhases(Phases):
     name = "fused"
+    carries_conduction = True   # the conduction hook leaves its particle passes to these kernels
 
     @staticmethod
     def supports(scene) -> bool:
@@ -26,7 +32,7 @@ class FusedPhases(Phases):
         sim.formulation.place_particles(sim.particles)
         method = sim.scene.method
         self._support = fused.support_of(method.shape_function)
-        self._kernels = fused.kernels(sim.scene.dimension)
+        self._kernels = fused.kernels(sim.scene.dimension, thermal=sim.conduction is not None)
         apic_d = shape.REGISTRY[method.shape_function].apic_d
         # APIC's (and MLS's) D_p^-1 per axis (unused without them); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
@@ -72,7 +78,8 @@ class FusedPhases(Phases):
         p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
         variant = self._p2g_variants[self.folds_force()]
         self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc, self._frame,
-                          self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt)
+                          self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt,
+                          *self._heat_p2g())
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -98,5 +105,27 @@ class FusedPhases(Phases):
         p, g, bad = sim.particles, sim.grid, self._bad
         self._kernels.g2p(self._g2p_variants[mode], p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume,
                           p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, dt,
-                          self._d_inv, sim.copies.momentum, bad)
+                          self._d_inv, sim.copies.momentum, bad, *self._heat_g2p(mode))
         sim.check_inversion(first_of(bad))
+
+    # -- conduction (nothing without it) ----------------------------------------------------
+
+    def _heat_p2g(self) -> tuple:
+        """The thermal kernels' extra P2G arguments (read at each call: the hook's nodal
+        arrays follow the grid's placements, the particles' their migration)."""
+        conduction = self.sim.conduction
+        if conduction is None:
+            return ()
+        x = self.sim.particles.extra
+        conduction.heat.fill(0.0)
+        return x["heat_capacity"], x["temperature"], x["heat_flux"], conduction.heat, conduction.copies_heat
+
+    def _heat_g2p(self, mode: int) -> tuple:
+        conduction = self.sim.conduction
+        if conduction is None:
+            return ()
+        x = self.sim.particles.extra
+        if mode == fused.REMAP:
+            conduction.remapped.fill(0.0)
+        return (x["heat_capacity"], x["temperature"], x["conductivity"], x["heat_flux"], conduction.T_old,
+                conduction.T_new, conduction.remapped, conduction.copies_remapped)

@@ -29,8 +29,10 @@ after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (a
 F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (the tracked
 corners of cpdi_q4 and cpdi_tet4, after_g2p).
 
-A hook that needs the stored stencil (the hoop terms, conduction) runs with the general kernels
-only: the fused backend's `supports(scene)` refuses such scenes. Ghost sums and halo
+A hook that needs the stored stencil (the hoop terms) runs with the general kernels
+only: the fused backend's `supports(scene)` refuses such scenes. Conduction's particle passes
+ride inside the fused kernels of a MUSL scene (`Phases.carries_conduction`); its node passes
+stay in the hook. Ghost sums and halo
 shares are not hooks: they complete each grid phase, after every hook of the point
 has added its part (solver/step/phases.py).
 """

@@ -26,6 +26,8 @@ from solver import kernels
 class Phases:
     """The phases of one simulation's step; `sim` holds the state (solver/stepper.py)."""
 
+    carries_conduction = False   # whether the backend's kernels do conduction's particle passes (fused)
+
     def __init__(self, sim):
         self.sim = sim
         self.dt = 0.0              # the step's dt, set by particles_to_grid

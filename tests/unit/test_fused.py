@@ -145,3 +145,83 @@ def test_fused_mls_folds_the_force_into_the_momentum_only_where_nothing_reads_it
     for name in ("x", "v", "F", "stress"):
         assert relative_difference(getattr(a, name), getattr(b, name)) <= TOLERANCE, name
     assert folded.boundary_work == pytest.approx(unfolded.boundary_work, rel=1e-9, abs=1e-12)
+
+# -- heat conduction carried by the fused kernels (MUSL) ------------------------------
+
+HEAT = {"thermal_conductivity": 2.0e5, "specific_heat": 500.0}
+
+
+def conducting(dimension: int, method: str, threads: int) -> dict:
+    """The two bodies of SCENE_2D/3D, the left a box that conducts, held at 400 K near x = 0,
+    the right without thermal keys (it takes no part in conduction)."""
+    scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
+    scene["materials"] = {"m": {**scene["materials"]["m"], **HEAT}, "cold": scene["materials"]["m"]}
+    left, right = scene["bodies"]
+    left["initial_temperature"] = 300.0
+    left["geometry"] = {"type": "box", "lower": [0.05] + right["geometry"]["lower"][1:],
+                        "upper": [0.45] + right["geometry"]["upper"][1:]}
+    right["material"] = "cold"
+    upper = scene["grid"]["upper"]
+    scene["boundary_conditions"].append({"type": "temperature", "temperature": 400.0,
+                                         "where": {"type": "box", "lower": [0.0] * dimension,
+                                                   "upper": [0.13] + upper[1:]}})
+    return {**scene, "method": METHODS[method], "parallel": {"threads": threads},
+            "time": {**scene["time"], "dt": 1e-4}}
+
+
+@pytest.mark.parametrize("dimension,method,threads", [
+    (2, "musl-linear-flip", 1), (2, "musl-linear-flip", 2), (3, "musl-linear-flip", 2),
+    (2, "musl-quadratic-mls", 2), (3, "musl-quadratic-apic", 1)])
+def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, threads):
+    """The thermal kernels do thermal_kernels.py's sums in the same order on the same weights.
+    In 2D the weights are the same bits, so after one step from the same state T_p and q_p
+    are too; in 3D the fused weight wx (wy wz) and the stored ((wx wy) wz) differ in the last
+    bit, and MLS's gradient takes D_p = h^2/4 exactly where the general one sums it. Over 60 steps the mechanics' round-off (see the module docstring) reaches the
+    temperatures through x_p and V_p: 1e-12 relative, as for the mechanics."""
+    scene = load_scene(conducting(dimension, method, threads))
+    fast, general = ExplicitMPM(scene), ExplicitMPM(scene, general=True)
+    assert fast.fused and not general.fused
+    a, b = fast.particles.extra, general.particles.extra
+    cold = general.particles.body == 1
+    start = b["temperature"][cold].copy()
+    fast.advance(1e-4)
+    general.advance(1e-4)
+    for name in ("temperature", "heat_flux"):
+        if dimension == 2 and METHODS[method]["transfer"] != "mls":
+            assert np.array_equal(a[name], b[name]), name
+        assert relative_difference(a[name], b[name]) <= TOLERANCE, name
+    for _ in range(STEPS - 1):
+        fast.advance(1e-4)
+        general.advance(1e-4)
+    T = b["temperature"]
+    assert np.ptp(T[general.particles.body == 0]) > 10.0   # the heat did spread into the body
+    assert np.array_equal(T[cold], start) and np.array_equal(a["temperature"][fast.particles.body == 1], start)
+    for name in ("temperature", "heat_flux"):
+        assert relative_difference(a[name], b[name]) <= TOLERANCE, name
+    assert relative_difference(fast.conduction.grid_temperature(), general.conduction.grid_temperature()) <= TOLERANCE
+    assert relative_difference(fast.particles.x, general.particles.x) <= TOLERANCE
+
+
+def test_conduction_with_usl_keeps_the_general_backend():
+    """USL's one fused G2P pass moves x_p before the flux could be gathered at x_p^t."""
+    scene = conducting(2, "usl-linear-pic", 1)
+    assert not fused.supports(load_scene(scene))
+    assert fused.supports(load_scene({**scene, "method": METHODS["musl-linear-flip"]}))
+
+
+def test_conduction_with_a_frictional_wall_keeps_the_general_backend():
+    """The wall's frictional heat goes into T~_I^{t+dt} after the grid update, before the
+    particles take it; the fused REMAP pass would take T~ first (solver/thermal.py)."""
+    scene = conducting(2, "musl-linear-flip", 1)
+    wall = {"type": "wall", "face": "y-", "mode": "friction", "friction": 0.3}
+    assert not fused.supports(load_scene({**scene, "boundary_conditions": scene["boundary_conditions"] + [wall]}))
+    assert fused.supports(load_scene(scene))
+
+
+def test_a_scene_without_heat_loads_the_kernels_of_a_template_without_heat():
+    """Conduction adds to the generated text only where the scene conducts."""
+    for dimension in (2, 3):
+        plain, thermal = fused_template.source(dimension), fused_template.source(dimension, thermal=True)
+        assert "capacity" not in plain and "heat" not in plain
+        assert "heat_flux" in thermal
+    assert ExplicitMPM(load_scene(SCENE_2D)).phases._kernels is fused.kernels(2)
