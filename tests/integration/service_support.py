@@ -120,7 +120,7 @@ class Stack:
         self.env = {**os.environ, "MPM_REDIS_URL": self.redis_url, "MPM_DATA_DIR": str(data_dir),
                     "MPM_PROGRESS_INTERVAL": "0.2", "MPM_CANCEL_GRACE_SECONDS": "5",
                     "MPM_LEASE_SECONDS": "3",
-                    "MPM_MAX_PARTICLES": "50000", "MPM_MAX_STEPS": "5000000",
+                    "MPM_MAX_PARTICLES": "80000", "MPM_MAX_STEPS": "5000000",
                     "MPM_MAX_BODY_BYTES": "100000",
                     "MPM_MAX_CONCURRENT_JOBS": "40", "MPM_MAX_PROCESSES": "2", "PYTHONUNBUFFERED": "1",
                     # the anonymous caller's quotas above MPM_MAX_CONCURRENT_JOBS, whose test this is

@@ -2,11 +2,13 @@
 
 The baseline was recorded on the commit before the step architecture was rewritten
 (`python tests/regression/record.py`); a refactor must give the same bits at the same
-thread count. Where a change legitimately reorders a sum, the case says so in
+thread count. Where a change legitimately reorders a sum, or the CPU sets the last bit, the case says so in
 ROUND_OFF with the reason, and is held to 1e-12 of the values instead.
 """
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +19,14 @@ from snapshot import differences, fingerprint, run_case
 
 BASELINE = Path(__file__).with_name("baseline.npz")
 CASES = cases()
-# case name -> why the order of a summation changed (none so far)
-ROUND_OFF: dict[str, str] = {}
+# numpy evaluates a scene expression's sin, cos, exp, ... on arrays with SIMD code picked for
+# the CPU (AVX-512 or not), whose last bit differs between machines: a scene driven by such an
+# expression reproduces the baseline of another machine to round-off, not bit for bit
+TRANSCENDENTAL = re.compile(r"\b(sin|cos|tan|asin|acos|atan|sinh|cosh|tanh|exp|log)\(")
+# case name -> why it is held to 1e-12 of the values instead of the bits
+ROUND_OFF: dict[str, str] = {
+    name: "numpy's transcendental functions differ in the last bit between CPUs"
+    for name, case in CASES.items() if TRANSCENDENTAL.search(json.dumps(case.scene))}
 
 
 @pytest.fixture(scope="module")

@@ -213,7 +213,7 @@ def test_conduction_with_a_frictional_wall_keeps_the_general_backend():
     """The wall's frictional heat goes into T~_I^{t+dt} after the grid update, before the
     particles take it; the fused REMAP pass would take T~ first (solver/thermal.py)."""
     scene = conducting(2, "musl-linear-flip", 1)
-    wall = {"type": "wall", "face": "y-", "mode": "friction", "friction": 0.3}
+    wall = {"type": "wall", "face": "y+", "mode": "friction", "friction": 0.3}
     assert not fused.supports(load_scene({**scene, "boundary_conditions": scene["boundary_conditions"] + [wall]}))
     assert fused.supports(load_scene(scene))
 
