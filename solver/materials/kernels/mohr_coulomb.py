@@ -185,15 +185,15 @@ def may_yield(s, m, sin_phi, two_c_cos):
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, cohesion, cutoff, threads):
+def _update(L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, cohesion, cutoff, threads):
     bounds = block_bounds(L.shape[0], threads)
     for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi,
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi,
                       cohesion, cutoff)
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, cohesion, cutoff):
+def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, cohesion, cutoff):
     # scratch per block, in this serial function: never shared between threads
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     A, V = np.empty((3, 3)), np.empty((3, 3))
@@ -217,6 +217,7 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, c
         state[p] = return_map(trial, lam, G, sin_phi, sin_psi, cohesion, cutoff, sig, planes, scratch)
         if state[p] != ELASTIC:
             eps_p[p] += _equivalent_plastic_strain(trial, sig, G)
+            work[p] += volume[p] * _return_work(trial, sig, K, G)
             for k in range(3):        # sigma += sum_k (s_k - trial_k) v_k v_k^T: exact off the changed part
                 dk, i = sig[k] - trial[k], order[k]
                 for a in range(3):
@@ -235,8 +236,21 @@ def _equivalent_plastic_strain(trial, sig, G):
     return math.sqrt(2.0 / 3.0 * total)
 
 
+@njit(cache=True)
+def _return_work(trial, sig, K, G):
+    """sigma : C^-1 : (trial - sigma) in principal space: the work of this step's plastic
+    strain at the returned stress, s : ds / (2 G) + m dm / K."""
+    mean = (sig[0] + sig[1] + sig[2]) / 3.0
+    d_mean = (trial[0] - sig[0] + trial[1] - sig[1] + trial[2] - sig[2]) / 3.0
+    total = mean * d_mean / K
+    for k in range(3):
+        total += (sig[k] - mean) * (trial[k] - sig[k] - d_mean) / (2.0 * G)
+    return total
+
+
 class MohrCoulomb(Frictional):
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
-                particles.extra["yield_state"][sl], dt, self.bulk, self.mu, self.sin_phi, self.sin_psi,
+                particles.extra["yield_state"][sl], particles.volume[sl], particles.extra["plastic_work"][sl],
+                dt, self.bulk, self.mu, self.sin_phi, self.sin_psi,
                 self.cohesion, self.tension_cutoff, numba.get_num_threads())
