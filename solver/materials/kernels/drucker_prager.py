@@ -36,7 +36,8 @@ from solver.threads import block_bounds
 def _update(L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c, cutoff, threads):
     bounds = block_bounds(L.shape[0], threads)
     for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c, cutoff)
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar,
+                      xi_c, cutoff)
 
 
 @njit(cache=True)

@@ -62,4 +62,5 @@ class J2Plasticity(LinearElastic):
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
-                particles.volume[sl], particles.extra["plastic_work"][sl], dt, self.bulk, self.mu, self.yield_stress, self.hardening, numba.get_num_threads())
+                particles.volume[sl], particles.extra["plastic_work"][sl],
+                dt, self.bulk, self.mu, self.yield_stress, self.hardening, numba.get_num_threads())
