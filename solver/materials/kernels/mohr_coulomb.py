@@ -216,8 +216,9 @@ def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_p
             trial[k] = values[order[k]]
         state[p] = return_map(trial, lam, G, sin_phi, sin_psi, cohesion, cutoff, sig, planes, scratch)
         if state[p] != ELASTIC:
-            eps_p[p] += _equivalent_plastic_strain(trial, sig, G)
-            work[p] += volume[p] * _return_work(trial, sig, K, G)
+            d_eps, d_work = _plastic_increments(trial, sig, K, G)
+            eps_p[p] += d_eps
+            work[p] += volume[p] * d_work
             for k in range(3):        # sigma += sum_k (s_k - trial_k) v_k v_k^T: exact off the changed part
                 dk, i = sig[k] - trial[k], order[k]
                 for a in range(3):
@@ -226,26 +227,19 @@ def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_p
 
 
 @njit(cache=True)
-def _equivalent_plastic_strain(trial, sig, G):
-    """sqrt(2/3 de_p : de_p), de_p = dev(trial - sig) / (2 G) in principal space."""
+def _plastic_increments(trial, sig, K, G):
+    """The return's plastic strain increment de_p = C^-1 : (trial - sig) in principal space:
+    its equivalent sqrt(2/3 dev(de_p) : dev(de_p)) and its work at the returned stress,
+    sig : de_p = s : dev(de_p) + m tr(de_p) = s : dev(de_p) + m dm / K."""
     mean = (trial[0] - sig[0] + trial[1] - sig[1] + trial[2] - sig[2]) / 3.0
+    stress_mean = (sig[0] + sig[1] + sig[2]) / 3.0
     total = 0.0
+    work = 0.0
     for k in range(3):
         e = (trial[k] - sig[k] - mean) / (2.0 * G)
         total += e * e
-    return math.sqrt(2.0 / 3.0 * total)
-
-
-@njit(cache=True)
-def _return_work(trial, sig, K, G):
-    """sigma : C^-1 : (trial - sigma) in principal space: the work of this step's plastic
-    strain at the returned stress, s : ds / (2 G) + m dm / K."""
-    mean = (sig[0] + sig[1] + sig[2]) / 3.0
-    d_mean = (trial[0] - sig[0] + trial[1] - sig[1] + trial[2] - sig[2]) / 3.0
-    total = mean * d_mean / K
-    for k in range(3):
-        total += (sig[k] - mean) * (trial[k] - sig[k] - d_mean) / (2.0 * G)
-    return total
+        work += (sig[k] - stress_mean) * e
+    return math.sqrt(2.0 / 3.0 * total), work + stress_mean * mean / K
 
 
 class MohrCoulomb(Frictional):
