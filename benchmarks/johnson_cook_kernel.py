@@ -11,7 +11,8 @@ compared (largest relative difference of the stress and of the plastic strain
 increment, over the particles that yield). Then two simulations of the bar, run to that state
 side by side, step on alternately, one with each kernel (`--steps` steps per turn, the same dt); the
 ratio base/this of the whole step (above 1: this tree is faster) and the two bars'
-lengths and diameters at the end.
+lengths and diameters at the end. The base's kernel must take the same arguments (from the
+commit that added `plastic_work` on; benchmarks/plastic_work_cost.py compares across it).
 """
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ def kernel_args(sim: ExplicitMPM, dt: float) -> tuple:
     x = p.extra
     empty = np.zeros(0)
     return (p.L.copy(), p.stress.copy(), p.mass.copy(), p.volume.copy(), x["plastic_strain"].copy(),
-            x["plastic_strain_rate"].copy(), x["temperature"].copy(), empty, empty, dt, model.mu, model.flow,
+            x["plastic_strain_rate"].copy(), x["temperature"].copy(), np.zeros(p.count), empty, empty, dt, model.mu, model.flow,
             model.eos, model.damage, model.failure, 1)
 
 

@@ -8,7 +8,8 @@ Drucker-Prager to mid-collapse (elastic, yielding and apex particles), tiled to 
 particles; each model's update_stress runs on copies of it with the base's kernel and
 with this tree's, taking turns (ns per particle, median of `repeats` and the range of the
 ratios base/this, above 1: this tree is faster); the two stresses are compared bit for
-bit. Then the column with each material is stepped twice from the same start, one twin
+bit. (The base must call its kernels as this tree does: from the commit that added
+`plastic_work` on; benchmarks/plastic_work_cost.py compares across that change.) Then the column with each material is stepped twice from the same start, one twin
 per kernel, alternately (ns per particle-step, ratios likewise) and the twins' positions
 compared bit for bit.
 """
@@ -54,6 +55,7 @@ def kernel_costs(kernels: dict, repeats: int) -> dict:
     L0, stress0 = np.tile(p.L, (tiles, 1, 1)), np.tile(p.stress, (tiles, 1, 1))
     count = L0.shape[0]
     fake = copy.copy(p)
+    fake.volume = np.tile(p.volume, tiles)
     out = {}
     for name, config in MODELS.items():
         model = materials.create(materials.REGISTRY[config["model"]].schema.model_validate(config), 2)
@@ -61,7 +63,7 @@ def kernel_costs(kernels: dict, repeats: int) -> dict:
         for round_ in range(repeats + 1):                   # round 0: compile, and the bits
             for variant, module in kernels[name].items():
                 MODULES[name]._update = module._update
-                fake.extra = {key: np.zeros(count) for key in ("plastic_strain", "yield_state")}
+                fake.extra = {key: np.zeros(count) for key in ("plastic_strain", "yield_state", "plastic_work")}
                 fake.L, fake.stress = L0.copy(), stress0.copy()
                 start = time.perf_counter()
                 model.update_stress(fake, slice(0, count), dt)

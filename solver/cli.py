@@ -213,8 +213,9 @@ def _balance_line(result_path: str) -> str | None:
     scale = max(float(np.nanmax(np.abs(series[name]))) for name in ("total_energy", "external_work", "boundary_work")
                 if name in series)
     share = f" ({100 * abs(error) / scale:.3g} % of the largest energy)" if scale > 0 else ""
+    dissipated = " + plastic work" if "plastic_work" in series else ""
     return (f"energy balance: total {float(series['total_energy'][-1]):.6g}, "
-            f"error {error:.3g}{share} (stored energy - work done on the bodies, against t = 0)")
+            f"error {error:.3g}{share} (stored energy{dissipated} - work done on the bodies, against t = 0)")
 
 
 def _exec_processes(processes: int, args: argparse.Namespace) -> None:

@@ -1,13 +1,14 @@
 """The energy balance of a run, as a sum over registered terms.
 
-Each term is an energy the bodies hold now (STORED: kinetic, strain; later thermal)
-or a work done on them since t = 0 (WORK: the loads and gravity, the boundary
-conditions and rigid bodies, damping; later friction). Energy is conserved when
+Each term is an energy the bodies hold now (STORED: kinetic, strain; later thermal),
+an energy they dissipated since t = 0 (DISSIPATED: the work of plastic flow) or a work
+done on them since t = 0 (WORK: the loads and gravity, the boundary conditions and
+rigid bodies, damping, friction, tools). Energy is conserved when
 
-    balance = sum(stored) - sum(work) = the stored energy at t = 0
+    balance = sum(stored) + sum(dissipated) - sum(work) = the stored energy at t = 0
 
 and `energy_error` = balance - initial is what the discretisation (and any process
-no term counts yet, such as plastic dissipation) made or lost. A physics that stores
+no term counts yet) made or lost. A physics that stores
 or exchanges energy registers its term here once (`register`): the series, the
 growth check and every display of the balance then include it.
 """
@@ -16,7 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-STORED, WORK = "stored", "work"
+from solver.materials import plastic_work
+
+STORED, DISSIPATED, WORK = "stored", "dissipated", "work"
 
 
 def _always(scene: Any) -> bool:
@@ -26,7 +29,7 @@ def _always(scene: Any) -> bool:
 @dataclass(frozen=True)
 class Term:
     name: str                                   # its time-series column
-    kind: str                                   # STORED or WORK
+    kind: str                                   # STORED, DISSIPATED or WORK
     local: Callable[[Any], float]               # this process's share, from the simulation
     present: Callable[[Any], bool] = _always    # whether a scene has it (a column of its series)
 
@@ -43,6 +46,7 @@ def _strain(sim) -> float:
 TERMS: list[Term] = [
     Term("kinetic_energy", STORED, _kinetic),
     Term("strain_energy", STORED, _strain),
+    Term(plastic_work.NAME, DISSIPATED, plastic_work.local, plastic_work.present),   # the return mappings
     Term("external_work", WORK, lambda sim: sim.external_work),     # gravity, body forces, loads
     Term("boundary_work", WORK, lambda sim: sim.boundary_work),     # walls, velocity conditions, rigid bodies
     Term("damping_work", WORK, lambda sim: sim.damping_work, lambda scene: scene.damping is not None),
@@ -86,8 +90,13 @@ class Energies:
         return self._sum(WORK)
 
     @property
+    def dissipated(self) -> float:
+        """The energy the bodies dissipated since t = 0 (plastic flow)."""
+        return self._sum(DISSIPATED)
+
+    @property
     def balance(self) -> float:
-        return self.total - self.work
+        return self.total + self.dissipated - self.work
 
     @property
     def supplied_work(self) -> float:
@@ -106,7 +115,7 @@ class Energies:
         values = self.__dict__.get("values", {})
         if name in values:
             return values[name]
-        if name.endswith("_work") or name.endswith("_energy"):
+        if name.endswith("_work") or name.endswith("_energy"):   # (plastic_work too)
             return 0.0   # a term this scene does not have
         raise AttributeError(name)
 

@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, Strict, model_validator
 
+from solver.materials import plastic_work
 from solver.materials.registry import MaterialType, StateVariable
 from solver.schema import ElasticMaterial, NonNegative, fmt, problems_at
 
@@ -18,7 +19,7 @@ Angle = Annotated[float, Strict(), Field(ge=0, lt=90)]   # degrees
 # yield surface (a plane of Mohr-Coulomb), 2 on an edge of Mohr-Coulomb, 3 at the apex,
 # 4 on the tension cut-off (the value of the last step).
 FRICTIONAL_STATE = (StateVariable("plastic_strain", output=True),   # accumulated sqrt(2/3 de_p : de_p)
-                    StateVariable("yield_state", output=True))
+                    StateVariable("yield_state", output=True), plastic_work.STATE)
 ELASTIC, SURFACE, EDGE, APEX, TENSION = 0, 1, 2, 3, 4
 
 

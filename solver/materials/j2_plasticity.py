@@ -3,6 +3,7 @@ hardening (review C.4; the return mapping is solver/materials/kernels/j2_plastic
 
 from typing import Literal
 
+from solver.materials import plastic_work
 from solver.materials.registry import MaterialType, StateVariable
 from solver.schema import ElasticMaterial, NonNegative, Positive
 
@@ -16,5 +17,6 @@ class J2Plasticity(ElasticMaterial):
 MATERIAL = MaterialType(
     schema=J2Plasticity,
     solver_class="solver.materials.kernels.j2_plasticity:J2Plasticity",
-    state=(StateVariable("plastic_strain", output=True),),   # equivalent plastic strain
+    state=(StateVariable("plastic_strain", output=True),   # equivalent plastic strain
+           plastic_work.STATE),
 )

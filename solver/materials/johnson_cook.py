@@ -9,6 +9,7 @@ from typing import Annotated, Literal, Union
 import numpy as np
 from pydantic import Field, Strict, ValidationInfo, field_validator, model_validator
 
+from solver.materials import plastic_work
 from solver.materials.registry import MaterialType, StateVariable
 from solver.schema import ElasticMaterial, NonNegative, Positive, Real, SceneModel, fmt, problems_at, scene_error
 
@@ -104,6 +105,7 @@ MATERIAL = MaterialType(
     state=(
         StateVariable("plastic_strain", output=True),
         StateVariable("plastic_strain_rate"),    # the last step's, the guess of the rate-dependent return
+        plastic_work.STATE,
         # NaN where no model tracks a temperature
         StateVariable("temperature", fill=math.nan, output=True, initial=_initial_temperature),
         StateVariable("damage", output=True, when=_tracks_damage),   # 1: failed

@@ -15,7 +15,8 @@ Tension cut-off m <= T (T below the apex): where the cone return does not apply
 is to the cut-off, m = T with the trial deviator (associated volumetric flow), or to
 its corner with the cone, m = T and sqrt(J2) = xi c - eta T, when the cone does not
 hold at m = T with the trial deviator. Every return is radial in the deviatoric plane, so the
-equivalent plastic strain grows by (sqrt(J2_trial) - sqrt(J2)) / (sqrt(3) G).
+equivalent plastic strain grows by (sqrt(J2_trial) - sqrt(J2)) / (sqrt(3) G), and the
+plastic work (`plastic_work`) by V sigma : C^-1 : (sigma_trial - sigma).
 """
 from __future__ import annotations
 
@@ -32,22 +33,25 @@ from solver.threads import block_bounds
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, eps_p, state, dt, K, G, eta, eta_bar, xi_c, cutoff, threads):
+def _update(L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c, cutoff, threads):
     bounds = block_bounds(L.shape[0], threads)
     for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, dt, K, G, eta, eta_bar, xi_c, cutoff)
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar,
+                      xi_c, cutoff)
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, eta, eta_bar, xi_c, cutoff):
+def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c, cutoff):
     # scratch per block, in this serial function: never shared between threads
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
-        m = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)   # inlined by numba
+        m_trial = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)   # inlined by numba
         j_trial = objective.von_mises(s) / math.sqrt(3.0)     # sqrt(J2)
-        m, j, state[p] = return_map(m, j_trial, K, G, eta, eta_bar, xi_c, cutoff)
+        m, j, state[p] = return_map(m_trial, j_trial, K, G, eta, eta_bar, xi_c, cutoff)
         if state[p] != ELASTIC:
             eps_p[p] += (j_trial - j) / (math.sqrt(3.0) * G)
+            # sigma_{n+1} : C^-1 : (sigma_trial - sigma_{n+1}), the deviator radial (s:s = 2 J2)
+            work[p] += volume[p] * (j * (j_trial - j) / G + m * (m_trial - m) / K)
             scale = j / j_trial if j_trial > 0.0 else 0.0
             for a in range(3):
                 for b in range(3):
@@ -80,5 +84,6 @@ class DruckerPrager(Frictional):
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
-                particles.extra["yield_state"][sl], dt, self.bulk, self.mu, self.eta, self.eta_bar,
+                particles.extra["yield_state"][sl], particles.volume[sl], particles.extra["plastic_work"][sl],
+                dt, self.bulk, self.mu, self.eta, self.eta_bar,
                 self.xi_c, self.tension_cutoff, numba.get_num_threads())

@@ -10,7 +10,8 @@ Hypoelastic, objective through the Jaumann rate (solver/materials/objective.py):
 The radial return is exact for proportional (radial) loading with linear
 hardening: in uniaxial stress the curve is E up to yield_stress, then
 E_t = E H / (E + H). Per particle it keeps the equivalent plastic strain
-(`plastic_strain`). The stored (elastic) energy is sigma : C^-1 : sigma / 2.
+(`plastic_strain`) and the work of plastic flow (`plastic_work`, J: q d eps_p V, with
+q of the returned stress; solver/materials/plastic_work.py). The stored (elastic) energy is sigma : C^-1 : sigma / 2.
 """
 from __future__ import annotations
 
@@ -24,14 +25,14 @@ from solver.threads import block_bounds
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, eps_p, dt, K, G, yield_stress, H, threads):
+def _update(L, stress, eps_p, volume, work, dt, K, G, yield_stress, H, threads):
     bounds = block_bounds(L.shape[0], threads)
     for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, dt, K, G, yield_stress, H)
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, volume, work, dt, K, G, yield_stress, H)
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, dt, K, G, yield_stress, H):
+def _update_block(lo, hi, L, stress, eps_p, volume, work, dt, K, G, yield_stress, H):
     # scratch per block, in this serial function: never shared between threads (nor in one cache line)
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
@@ -41,7 +42,9 @@ def _update_block(lo, hi, L, stress, eps_p, dt, K, G, yield_stress, H):
         if q > sigma_y:
             d_eps = (q - sigma_y) / (3.0 * G + H)
             eps_p[p] += d_eps
-            scale = (sigma_y + H * d_eps) / q
+            flow = sigma_y + H * d_eps                  # q of the returned stress
+            scale = flow / q
+            work[p] += volume[p] * flow * d_eps         # sigma_{n+1} : d eps_p (plastic_work.py)
             for a in range(3):
                 for b in range(3):
                     s[a, b] *= scale
@@ -59,4 +62,5 @@ class J2Plasticity(LinearElastic):
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
+                particles.volume[sl], particles.extra["plastic_work"][sl],
                 dt, self.bulk, self.mu, self.yield_stress, self.hardening, numba.get_num_threads())

@@ -26,7 +26,8 @@ Per particle and step (stress sigma = s - p I, p positive in compression):
    deviator and any tension at once.
 
 Per-particle state: plastic_strain, plastic_strain_rate, temperature (the body's
-initial_temperature, else room_temperature), and damage (+ damage_init) only when
+initial_temperature, else room_temperature), plastic_work (J: sigma_f d eps_p V summed,
+sigma_f the returned stress's q; solver/materials/plastic_work.py), and damage (+ damage_init) only when
 the material has a damage model or a failure criterion (declared, with their start
 values, in solver/materials/johnson_cook.py).
 The stored energy is a function of the current state, the energy of the stress
@@ -118,19 +119,19 @@ def plastic_increment(q_trial, three_g, sigma_static, C, rate_floor, guess):
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm,
+def _update(L, stress, mass, volume, eps_p, eps_rate, T, work, dmg, d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm,
             threads):
     """Update the particles' stress and state; returns the largest wave speed (K_t + 4/3 G') / rho."""
     bounds = block_bounds(L.shape[0], threads)
     fastest = np.zeros(threads)
     for t in prange(threads):
-        fastest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, mass, volume, eps_p, eps_rate, T, dmg,
+        fastest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, mass, volume, eps_p, eps_rate, T, work, dmg,
                                    d_init, dt, G, prm, eos_prm, dmg_prm, fail_prm)
     return math.sqrt(fastest.max())
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
+def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, work, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
                   fail_prm):
     # scratch per block, in this serial function: never shared between threads (nor in one cache line)
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
@@ -156,6 +157,7 @@ def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, dmg, d_in
             d_eps = plastic_increment(q, 3.0 * g, sigma_f, prm[C], prm[RATE0] * dt, eps_rate[p] * dt)
             sigma_f = q - 3.0 * g * d_eps
             s *= sigma_f / q
+            work[p] += volume[p] * sigma_f * d_eps     # sigma_{n+1} : d eps_p, as the heat below
         eps_p[p] += d_eps
         eps_rate[p] = d_eps / dt
 
@@ -233,7 +235,7 @@ class JohnsonCook(IsotropicElastic):
         x = particles.extra
         fastest = _update(particles.L[sl], particles.stress[sl],
                           particles.mass[sl], particles.volume[sl], x["plastic_strain"][sl],
-                          x["plastic_strain_rate"][sl], x["temperature"][sl],
+                          x["plastic_strain_rate"][sl], x["temperature"][sl], x["plastic_work"][sl],
                           self._optional(particles, "damage", sl), self._optional(particles, "damage_init", sl),
                           dt, self.mu, self.flow, self.eos, self.damage, self.failure, numba.get_num_threads())
         # The EOS stiffens under compression: the time step follows the current state.

@@ -185,15 +185,15 @@ def may_yield(s, m, sin_phi, two_c_cos):
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, cohesion, cutoff, threads):
+def _update(L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, cohesion, cutoff, threads):
     bounds = block_bounds(L.shape[0], threads)
     for t in prange(threads):
-        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi,
+        _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi,
                       cohesion, cutoff)
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, cohesion, cutoff):
+def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, cohesion, cutoff):
     # scratch per block, in this serial function: never shared between threads
     D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     A, V = np.empty((3, 3)), np.empty((3, 3))
@@ -216,7 +216,9 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, c
             trial[k] = values[order[k]]
         state[p] = return_map(trial, lam, G, sin_phi, sin_psi, cohesion, cutoff, sig, planes, scratch)
         if state[p] != ELASTIC:
-            eps_p[p] += _equivalent_plastic_strain(trial, sig, G)
+            d_eps, d_work = _plastic_increments(trial, sig, K, G)
+            eps_p[p] += d_eps
+            work[p] += volume[p] * d_work
             for k in range(3):        # sigma += sum_k (s_k - trial_k) v_k v_k^T: exact off the changed part
                 dk, i = sig[k] - trial[k], order[k]
                 for a in range(3):
@@ -225,18 +227,24 @@ def _update_block(lo, hi, L, stress, eps_p, state, dt, K, G, sin_phi, sin_psi, c
 
 
 @njit(cache=True)
-def _equivalent_plastic_strain(trial, sig, G):
-    """sqrt(2/3 de_p : de_p), de_p = dev(trial - sig) / (2 G) in principal space."""
+def _plastic_increments(trial, sig, K, G):
+    """The return's plastic strain increment de_p = C^-1 : (trial - sig) in principal space:
+    its equivalent sqrt(2/3 dev(de_p) : dev(de_p)) and its work at the returned stress,
+    sig : de_p = s : dev(de_p) + m tr(de_p) = s : dev(de_p) + m dm / K."""
     mean = (trial[0] - sig[0] + trial[1] - sig[1] + trial[2] - sig[2]) / 3.0
+    stress_mean = (sig[0] + sig[1] + sig[2]) / 3.0
     total = 0.0
+    work = 0.0
     for k in range(3):
         e = (trial[k] - sig[k] - mean) / (2.0 * G)
         total += e * e
-    return math.sqrt(2.0 / 3.0 * total)
+        work += (sig[k] - stress_mean) * e
+    return math.sqrt(2.0 / 3.0 * total), work + stress_mean * mean / K
 
 
 class MohrCoulomb(Frictional):
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
-                particles.extra["yield_state"][sl], dt, self.bulk, self.mu, self.sin_phi, self.sin_psi,
+                particles.extra["yield_state"][sl], particles.volume[sl], particles.extra["plastic_work"][sl],
+                dt, self.bulk, self.mu, self.sin_phi, self.sin_psi,
                 self.cohesion, self.tension_cutoff, numba.get_num_threads())
