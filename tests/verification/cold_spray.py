@@ -70,8 +70,9 @@ def _scale_geometry(geometry: dict, factor: float) -> None:
     for key in ("center", "lower", "upper"):
         if key in geometry:
             geometry[key] = [factor * v for v in geometry[key]]
-    if "radius" in geometry:
-        geometry["radius"] *= factor
+    for key in ("radius", "height"):
+        if key in geometry:
+            geometry[key] *= factor
     for part in geometry.get("parts", ()):
         _scale_geometry(part, factor)
 
@@ -104,8 +105,20 @@ def powder_diameter(scene: dict) -> float:
     return 2.0 * next(p["radius"] for p in parts if p["type"] == "sphere")
 
 
+def _top(geometry: dict, axis: int) -> float:
+    kind = geometry["type"]
+    if kind == "box":
+        return geometry["upper"][axis]
+    if kind == "cylinder" and geometry["axis"] == axis:
+        return geometry["center"][axis] + 0.5 * geometry["height"]
+    if kind == "intersection":
+        return min(_top(part, axis) for part in geometry["parts"] if part["type"] in ("box", "cylinder", "intersection"))
+    raise ValueError(f"no top for a {kind}")
+
+
 def substrate_top(scene: dict) -> float:
-    return scene["bodies"][SUBSTRATE]["geometry"]["upper"][scene["dimension"] - 1]
+    """The substrate's original top: its box's (the 3D quarter's: the box's and the cylinder's)."""
+    return _top(scene["bodies"][SUBSTRATE]["geometry"], scene["dimension"] - 1)
 
 
 def particle_spacing(scene: dict, body: int) -> float:
