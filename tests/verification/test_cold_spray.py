@@ -100,20 +100,14 @@ def test_axisymmetric_and_3d_quarter_agree(tmp_path_factory):
         assert abs(measures[3][key] - measures[2][key]) <= allowed, (key, measures)
 
 
-def test_published_speed_trends():
+def test_published_speed_trends(tmp_path_factory):
     """Li et al. 2006 and Dykhuizen et al. 1999 on the coarse scene, single field, 400 / 600 /
     800 m/s (docs/benchmarks.md, Cold spray, "Against published trends", has the whole series
     400-800 m/s at both resolutions and with the contact)."""
-    from solver import run
-    import tempfile
     measures = {}
     for speed in (400.0, 600.0, 800.0):
         scene = impact(coarse_axisymmetric(), speed)
-        with tempfile.TemporaryDirectory() as folder:
-            from mpm_cases import Case
-            case = Case(run(scene, folder))
-            assert case.result.status == "complete", case.result.message
-            measures[speed] = splat_measures(case.frame(-1), scene)
+        measures[speed] = splat_measures(run_case(scene, tmp_path_factory, f"cold_spray_{speed:.0f}").frame(-1), scene)
     # Resolution: each measure reads the extreme particles, within one cell of the surface it
     # stands for: one cell over d0 = 2 um / 20 um = 0.1. A change is resolved when it is larger.
     cell = 0.1
