@@ -52,6 +52,7 @@ TERMS: list[Term] = [
     Term("damping_work", WORK, lambda sim: sim.damping_work, lambda scene: scene.damping is not None),
     Term("friction_work", WORK, lambda sim: sim.friction_work, lambda scene: frictional(scene)),   # solver/contact.py
     Term("tool_work", WORK, lambda sim: sim.tool_work, lambda scene: bool(scene.tools)),   # solver/tools.py
+    Term("tool_penalty_energy", STORED, lambda sim: sim.tools.stored_energy(sim), lambda scene: bool(scene.tools)),
 ]
 
 
