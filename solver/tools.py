@@ -416,16 +416,18 @@ class Tools:
     # -- restart checkpoints (solver/checkpoint.py) ----------------------------------
 
     def state(self) -> dict[str, np.ndarray]:
-        """What a checkpoint keeps: the displacement, and the impulses (summed over the
-        processes: a collective call) and time since the last series row."""
+        """What a checkpoint keeps: the displacement, the impulses (summed over the processes:
+        a collective call) and time since the last series row, and the penalty's time step."""
         return {"displacement": self.displacement.copy(), "impulse": self.domain.sum(self.impulse),
-                "elapsed": np.array([self.elapsed])}
+                "elapsed": np.array([self.elapsed]), "time_step": np.array([self.domain.min(self.time_step)])}
 
     def restore(self, state: dict[str, np.ndarray], root: bool) -> None:
         """The state of a checkpoint; the impulses' total goes to one process (`root`)."""
         self.displacement[:] = state["displacement"]
         self.impulse[:] = state["impulse"] if root else 0.0
         self.elapsed = float(state["elapsed"][0])
+        # the penalty's limit of the last step, which sets the next one (none in older checkpoints)
+        self.time_step = float(state["time_step"][0]) if "time_step" in state else np.inf
 
     def series(self) -> dict[str, float]:
         """reaction_<tool>_<axis>: the mean force of the material on each tool since the last call
