@@ -23,9 +23,19 @@ no grid contact, as in ULMPM, on one process or several (each process pushes the
 particles it holds; the reactions are summed). The tool moves after the step by dt
 times its velocity at the end of the step, as rigid bodies do (solver/rigid.py).
 
+In an axisymmetric scene a tool is a body of revolution whose cross-section is its
+geometry, and a particle a ring: its face is 2 pi r s (Tools below), its force the ring's.
+
 Time series: reaction_<tool>_<axis>, the mean force of the material on the tool since
-the last row (minus the sum of the forces the particles received); energy: `tool_work`,
-dt sum_p f_p . v_p^(t+dt), the work the tools did on the bodies (solver/energy.py).
+the last row (minus the sum of the forces the particles received); energy
+(solver/energy.py): `tool_penalty_energy`, the penalty's potential sum_p f_n d / (5/2)
+(stored), and `tool_work`, dt sum_p (f_n,p . u + f_t,p . v_p^(t+dt)): the penalty's work
+at the tool's velocity u (its springs are part of the system), the friction's as the
+particles receive it.
+
+Time step: the adaptive step keeps under 2 sqrt(m / k_eff) of the particles near a tool,
+k_eff = df_n / dd at the depth they may reach in the step (penalty_time_step; times the
+cfl, solver/stepper.py): a stiff tool's penalty is stiffer than the material's waves.
 """
 from __future__ import annotations
 
