@@ -1,6 +1,6 @@
 """The energy balance of a run, as a sum over registered terms.
 
-Each term is an energy the bodies hold now (STORED: kinetic, strain; later thermal),
+Each term is an energy the bodies hold now (STORED: kinetic, strain, the tools' penalty),
 an energy they dissipated since t = 0 (DISSIPATED: the work of plastic flow) or a work
 done on them since t = 0 (WORK: the loads and gravity, the boundary conditions and
 rigid bodies, damping, friction, tools). Energy is conserved when

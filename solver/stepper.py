@@ -176,7 +176,7 @@ class ExplicitMPM:
         dt = float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300))) * self.formulation.time_step_factor(self)
         if self.conduction is not None:   # and the explicit conduction's limit rho c h^2 / (2 d k)
             dt = min(dt, self.conduction.stable_time_step(cfl))
-        if self.tools is not None:   # and the penalty springs of the particles a tool pushed last step
+        if self.tools is not None:   # and the penalty springs of the particles near a tool (its last step)
             dt = min(dt, cfl * self.domain.min(self.tools.time_step))
         return dt
 
