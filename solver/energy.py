@@ -1,6 +1,6 @@
 """The energy balance of a run, as a sum over registered terms.
 
-Each term is an energy the bodies hold now (STORED: kinetic, strain; later thermal),
+Each term is an energy the bodies hold now (STORED: kinetic, strain, the tools' penalty),
 an energy they dissipated since t = 0 (DISSIPATED: the work of plastic flow) or a work
 done on them since t = 0 (WORK: the loads and gravity, the boundary conditions and
 rigid bodies, damping, friction, tools). Energy is conserved when
@@ -52,6 +52,7 @@ TERMS: list[Term] = [
     Term("damping_work", WORK, lambda sim: sim.damping_work, lambda scene: scene.damping is not None),
     Term("friction_work", WORK, lambda sim: sim.friction_work, lambda scene: frictional(scene)),   # solver/contact.py
     Term("tool_work", WORK, lambda sim: sim.tool_work, lambda scene: bool(scene.tools)),   # solver/tools.py
+    Term("tool_penalty_energy", STORED, lambda sim: sim.tools.stored_energy(sim), lambda scene: bool(scene.tools)),
 ]
 
 

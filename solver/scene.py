@@ -988,14 +988,35 @@ def _tool_problems(scene: Scene, length_ok, expressions_ok) -> list[tuple[str, s
         _geometry_problems(f"{path}.geometry", tool.geometry, scene.dimension, problems)
         if length_ok(f"{path}.velocity", tool.velocity):
             expressions_ok(f"{path}.velocity", tool.velocity, TIME_VARIABLES)
-    if scene.tools and scene.axisymmetric:
-        problems.append(("tools", "are not supported yet in axisymmetric scenes"))
+        if scene.axisymmetric:
+            problems.extend(_revolution_problems(path, tool))
     for b, body in enumerate(scene.bodies if scene.tools else ()):
         material = scene.materials.get(body.material)
         if material is not None and not isinstance(material, Rigid) and not hasattr(material, "shear_modulus"):
             problems.append(("tools", f"a tool's stiffness is a multiple of the shear modulus of the material it "
                                       f"touches, and bodies[{b}] ({body.name!r}) is of material {body.material!r} "
                                       f"(model {material.model!r}), which has none"))
+    return problems
+
+
+def _revolution_problems(path: str, tool: Tool) -> list[tuple[str, str]]:
+    """In an axisymmetric scene a tool is a body of revolution around the axis r = 0: its
+    cross-section lies at r >= 0 (a face or an edge on the axis is the axis, no surface) and
+    it moves along the axis only."""
+    problems = []
+    geometry = tool.geometry
+    if isinstance(geometry, BoxGeometry) and geometry.lower[0] < 0:
+        problems.append((f"{path}.geometry.lower[0]", "must be >= 0 in an axisymmetric scene (a box from r = 0 "
+                                                      "is a cylinder)"))
+    if isinstance(geometry, PolygonGeometry) and min(x for x, _ in geometry.vertices) < 0:
+        problems.append((f"{path}.geometry.vertices", "must have r = x >= 0 in an axisymmetric scene (the "
+                                                      "cross-section of the tool of revolution)"))
+    if isinstance(geometry, SphereGeometry) and geometry.center[0] != 0 and geometry.center[0] < geometry.radius:
+        problems.append((f"{path}.geometry.center[0]", "must be 0 (a sphere) or at least the radius (a torus) in "
+                                                       "an axisymmetric scene"))
+    if tool.velocity is not None and tool.velocity[0] != 0:
+        problems.append((f"{path}.velocity[0]", "must be 0 in an axisymmetric scene: a tool of revolution moves "
+                                                "along the axis only"))
     return problems
 
 

@@ -170,11 +170,14 @@ class ExplicitMPM:
         return max((m.wave_speed for m, _ in self.materials), default=0.0)
 
     def stable_time_step(self, cfl: float) -> float:
-        """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73), times the formulation's factor."""
+        """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73), times the formulation's factor;
+        at most cfl times conduction's limit and the tools' penalty limit (solver/tools.py), where they are."""
         speed = self.domain.max(self.wave_speed) + self.domain.max(kernels.max_speed_per_axis(self.particles.v))
         dt = float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300))) * self.formulation.time_step_factor(self)
         if self.conduction is not None:   # and the explicit conduction's limit rho c h^2 / (2 d k)
             dt = min(dt, self.conduction.stable_time_step(cfl))
+        if self.tools is not None:   # and the penalty springs of the particles near a tool (its last step)
+            dt = min(dt, cfl * self.domain.min(self.tools.time_step))
         return dt
 
     def reactions(self) -> dict[str, float]:
