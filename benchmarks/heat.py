@@ -9,11 +9,8 @@ all alike), `repeats` runs of `steps` steps each, for each thread count:
 
     no heat            the scene without thermal keys (fused backend)
     conduction         the same scene with conduction and a held face (fused: the
-                       temperature rides in the fused P2G, REMAP and KINEMATICS passes;
-                       one specific heat, so C_I = c m_I is not scattered)
+                       temperature rides in the fused P2G, REMAP and KINEMATICS passes)
     cond. + expansion  and thermal expansion
-    C_I scattered      conduction with C_I = sum_p w m_p c scattered by the P2G (what a
-                       scene with several specific heats does; the step before that)
     separate passes    conduction + expansion on the general backend, the thermal
                        particle passes apart (solver/thermal_kernels.py): the step before
                        conduction was fused
@@ -70,17 +67,15 @@ def seconds_per_step(sim: ExplicitMPM, steps: int) -> float:
     return (time.perf_counter() - start) / steps
 
 
-VARIANTS = ("no heat", "conduction", "cond. + expansion", "C_I scattered", "separate passes")
+VARIANTS = ("no heat", "conduction", "cond. + expansion", "separate passes")
 
 
 def simulations(dim: int, cell: float, threads: int) -> dict[str, ExplicitMPM]:
     sims = {"no heat": ExplicitMPM(load_scene(block(dim, cell, False, threads))),
             "conduction": ExplicitMPM(load_scene(block(dim, cell, True, threads, expansion=False))),
             "cond. + expansion": ExplicitMPM(load_scene(block(dim, cell, True, threads))),
-            "C_I scattered": ExplicitMPM(load_scene(block(dim, cell, True, threads))),
             "separate passes": ExplicitMPM(load_scene(block(dim, cell, True, threads)), general=True)}
-    sims["C_I scattered"].conduction.capacity = None   # the fused P2G as before: C_I = sum w m c scattered
-    assert [sim.fused for sim in sims.values()] == [True, True, True, True, False]
+    assert [sim.fused for sim in sims.values()] == [True, True, True, False]
     return sims
 
 

@@ -189,8 +189,7 @@ def _heat_p2g_node(dim: int) -> list[str]:
         *_indent(_each_line("tg{c} = dw{c} * d_inv{a}", dim), 1),
         "else:",
         f"    {_each('tg{c}', dim)} = {_each('dw{c}', dim)}",
-        "if not uniform:   # (one specific heat: C_I = c m_I, set after the kernel, solver/step/fused.py)",
-        "    " + _scatter("th", "node, 0", "+=", "w * mcap"),
+        _scatter("th", "node, 0", "+=", "w * mcap"),
         _scatter("th", "node, 1", "+=", "w * mct"),
         _scatter("th", "node, 2", "+=", f"vol * (0.0 + {_each('q{c} * tg{c}', dim, ' + ')})"),
     ]
@@ -232,7 +231,7 @@ def _p2g(dim: int, thermal: bool) -> list[str]:
     return _shell(
         "p2g(variant, x, v, C, mass, volume, stress, acc, frame, d_inv, grid_mass, grid_mom, grid_force,\n"
         "        copies_mass, copies_mom, copies_force, bad, dt"
-        + (",\n        capacity, T, heat_flux, heat, copies_heat, uniform_)" if thermal else ")"),
+        + (",\n        capacity, T, heat_flux, heat, copies_heat)" if thermal else ")"),
         "m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =\n"
         "    sum_p m_p w b_p - V_p sigma_p grad w (MLS: w D_p^-1 (x_I - x_p) for grad w). bad[t]: first\n"
         "    particle of block t outside the grid. `fold` (MLS only): f_I is not formed, dt f_I is\n"
@@ -240,8 +239,7 @@ def _p2g(dim: int, thermal: bool) -> list[str]:
         "    variant: (support, affine, loaded, mls, fold) constants; frame: (lower, h, inv_h, cells,\n"
         "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
         "    the other threads."
-        + ("\n\n    Conduction: heat (n, 3) gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p; with\n"
-           "    `uniform` (one specific heat in the scene) C_I is left to the caller (c m_I)." if thermal else ""),
+        + ("\n\n    Conduction: heat (n, 3) gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p." if thermal else ""),
         ["support, affine_, loaded_, mls_, fold_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
@@ -252,7 +250,7 @@ def _p2g(dim: int, thermal: bool) -> list[str]:
          "fold = fold_.ndim == 2",
          "gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
          "gf = grid_force if fold else own(t, grid_force, copies_force)",
-         *(["th = own(t, heat, copies_heat)", "uniform = uniform_.ndim == 2"] if thermal else [])],
+         *(["th = own(t, heat, copies_heat)"] if thermal else [])],
         _p2g_particle(dim, thermal),
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",

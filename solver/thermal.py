@@ -64,13 +64,6 @@ def _per_particle(scene, body: np.ndarray, value) -> np.ndarray:
     return np.ascontiguousarray(np.array(per_body, dtype=np.float64)[body])
 
 
-def uniform_capacity(scene) -> float | None:
-    """The specific heat every body has, where they share one (> 0), else None: then the
-    nodal heat capacity sum_p w m_p c is c m_I, which the fused P2G need not scatter."""
-    values = {getattr(scene.materials[b.material], "specific_heat", None) or 0.0 for b in scene.bodies}
-    return values.pop() if len(values) == 1 and min(values) > 0.0 else None
-
-
 def init_particles(scene, particles) -> None:
     """The thermal state, where the scene has conduction or expansion: the temperature
     (NaN left by a model that tracks none is set from the bodies), and for conduction
@@ -214,7 +207,6 @@ class Conduction:
     def __init__(self, scene, particles):
         self.scene = scene
         self.reference = scene.method.formulation == "tlmpm"   # Algorithm 8 on X_p, V0_p and Q_p
-        self.capacity = uniform_capacity(scene)   # c of every body, or None (read by the fused P2G)
         p = particles
         mc = p.mass * p.extra["heat_capacity"]
         self.cutoff = CAPACITY_CUTOFF_FRACTION * float(mc[mc > 0].min()) if np.any(mc > 0) else 0.0

@@ -5,8 +5,7 @@ stored stencil. USL's G2P and kinematics are one pass; MUSL's remap keeps v_pic
 (`rate`) until the kinematics pass moves x_p.
 
 Heat conduction (MUSL only, fused_scope) rides in the same passes, in kernels generated
-for conducting scenes alone: P2G adds C_I (c m_I where the scene has one specific heat: one
-scatter less), (C T)_I, Q_I; the REMAP pass updates T_p and
+for conducting scenes alone: P2G adds C_I, (C T)_I, Q_I; the REMAP pass updates T_p and
 maps m c T_p back; the KINEMATICS pass, after the conduction hook formed the remapped
 T_I^{t+dt}, gathers q_p. The hook (solver/thermal.py) keeps the node passes."""
 from __future__ import annotations
@@ -81,8 +80,6 @@ class FusedPhases(Phases):
         self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc, self._frame,
                           self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt,
                           *self._heat_p2g())
-        if sim.conduction is not None and sim.conduction.capacity is not None:
-            np.multiply(sim.conduction.capacity, g.mass, out=sim.conduction.heat[:, 0])   # C_I = c m_I
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -121,8 +118,7 @@ class FusedPhases(Phases):
             return ()
         x = self.sim.particles.extra
         conduction.heat.fill(0.0)
-        return (x["heat_capacity"], x["temperature"], x["heat_flux"], conduction.heat, conduction.copies_heat,
-                fused.constant(conduction.capacity is not None))
+        return x["heat_capacity"], x["temperature"], x["heat_flux"], conduction.heat, conduction.copies_heat
 
     def _heat_g2p(self, mode: int) -> tuple:
         conduction = self.sim.conduction

@@ -202,27 +202,6 @@ def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, t
     assert relative_difference(fast.particles.x, general.particles.x) <= TOLERANCE
 
 
-@pytest.mark.parametrize("dimension,method,threads", [(2, "musl-linear-flip", 2), (3, "musl-quadratic-mls", 1)])
-def test_one_specific_heat_takes_the_nodal_capacity_from_the_mass(dimension, method, threads):
-    """Where every body has the same c, the fused P2G scatters no C_I: it is c m_I, which
-    differs from sum_p w m_p c by the order of the products only (round-off, 1e-12 relative
-    over 60 steps as above). Both bodies conduct here, the right one from 300 K too."""
-    scene = conducting(dimension, method, threads)
-    scene["materials"]["cold"].update(HEAT)
-    scene["bodies"][1]["initial_temperature"] = 300.0
-    fast, general = ExplicitMPM(load_scene(scene)), ExplicitMPM(load_scene(scene), general=True)
-    assert fast.fused and fast.conduction.capacity == HEAT["specific_heat"]
-    assert ExplicitMPM(load_scene(conducting(dimension, method, threads))).conduction.capacity is None
-    for _ in range(STEPS):
-        fast.advance(1e-4)
-        general.advance(1e-4)
-    a, b = fast.particles.extra, general.particles.extra
-    assert np.ptp(b["temperature"]) > 10.0
-    for name in ("temperature", "heat_flux"):
-        assert relative_difference(a[name], b[name]) <= TOLERANCE, name
-    assert relative_difference(fast.conduction.grid_temperature(), general.conduction.grid_temperature()) <= TOLERANCE
-
-
 def test_conduction_with_usl_keeps_the_general_backend():
     """USL's one fused G2P pass moves x_p before the flux could be gathered at x_p^t."""
     scene = conducting(2, "usl-linear-pic", 1)
