@@ -50,37 +50,34 @@ AXES = "xyz"
 # -- the fields ------------------------------------------------------------------
 
 @njit(parallel=True, cache=True)
-def offset_fields(idx, body, field_of_body, n_nodes):
-    """Point each particle's stencil into its body's field: idx += field * n_nodes."""
-    for p in prange(idx.shape[0]):   # each particle its own row
-        shift = field_of_body[body[p]] * n_nodes
-        for k in range(idx.shape[1]):
-            idx[p, k] += shift
-
-
-@njit(parallel=True, cache=True)
-def scatter_normals(spec, idx, w, dw, volume, weight, presence, gradient, copies_presence, copies_gradient):
-    """presence_I += V_p phi_I (the volume the body's particles give the node), gradient_I +=
-    w_p grad phi_I ([R] 5.12), per field through the stencil (solver/kernels.py's P2G
-    pattern: block t of particles into copy t - 1)."""
+def fields_and_normals(spec, idx, body, field_of_body, n_nodes, w, dw, mass, volume, presence, gradient,
+                       copies_presence, copies_gradient):
+    """Point each particle's stencil into its body's field (idx += field * n_nodes) and, in the
+    same pass, presence_I += V_p phi_I (the volume the body's particles give the node) and
+    gradient_I += w_p grad phi_I ([R] 5.12) with w_p the mass (a rigid particle, which carries
+    none: its volume, only the direction of its field's normal counts), per field through the
+    stencil (solver/kernels.py's P2G pattern: block t of particles into copy t - 1)."""
     dims, nodes = spec
     blocks = copies_presence.shape[0] + 1
     bounds = block_bounds(w.shape[0], blocks)
     for t in prange(blocks):
-        _normals_block(dims, nodes, bounds[t], bounds[t + 1], idx, w, dw, volume, weight,
-                       own(t, presence, copies_presence), own(t, gradient, copies_gradient))
+        _normals_block(dims, nodes, bounds[t], bounds[t + 1], idx, body, field_of_body, n_nodes, w, dw, mass,
+                       volume, own(t, presence, copies_presence), own(t, gradient, copies_gradient))
     if blocks > 1:
         add_node_copies(presence, copies_presence)
         add_node_copies(gradient, copies_gradient)
 
 
 @njit(cache=True)
-def _normals_block(dims, nodes, start, stop, idx, w, dw, volume, weight, presence, gradient):
+def _normals_block(dims, nodes, start, stop, idx, body, field_of_body, n_nodes, w, dw, mass, volume, presence,
+                   gradient):
     dim, nk = len(dims), len(nodes)
     for p in range(start, stop):
-        m = weight[p]
+        shift = field_of_body[body[p]] * n_nodes
+        m = mass[p] if mass[p] > 0.0 else volume[p]
         for k in range(nk):
-            node = idx[p, k]
+            node = idx[p, k] + shift
+            idx[p, k] = node
             presence[node] += volume[p] * w[p, k]
             for a in range(dim):
                 gradient[node, a] += m * dw[p, k, a]
@@ -413,13 +410,12 @@ class FieldContact:
         volume: only the direction of its field's normal counts). Once a step, before any grid
         velocity is formed."""
         p, s, g = sim.particles, sim.stencil, self.grid
-        offset_fields(s.idx, p.body, self.field_of_body, g.n_nodes)
-        weight = np.where(p.mass > 0.0, p.mass, p.volume)
         self.presence.fill(0.0)
         self.gradient.fill(0.0)
-        scatter_normals(sim.spec, s.idx, s.w, s.dw, p.volume, weight, self.presence, self.gradient,
-                        sim.copies.mass, sim.copies.force)
+        fields_and_normals(sim.spec, s.idx, p.body, self.field_of_body, g.n_nodes, s.w, s.dw, p.mass, p.volume,
+                           self.presence, self.gradient, sim.copies.mass, sim.copies.force)
         if self.normals == "density_gradient":
+            weight = np.where(p.mass > 0.0, p.mass, p.volume)
             self.gradient.fill(0.0)
             density = np.zeros(g.fields * int(np.prod(g.cells)))
             cell_densities(p.x, p.body, self.field_of_body, weight, g.lower, g.inv_h, g.cells, density)
