@@ -202,7 +202,10 @@ def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_p
     lam = K - 2.0 * G / 3.0
     two_c_cos = 2.0 * cohesion * math.sqrt(1.0 - sin_phi * sin_phi)
     for p in range(lo, hi):
-        m = -objective.trial_stress(L[p], stress[p], dt, K, G, D, W, Q, tmp, s)   # inlined by numba
+        # the Jaumann trial stress, written out (kernels/objective.py says why)
+        objective.rate_tensors(L[p], D, W)
+        objective.rotate(stress[p], W, dt, Q, tmp)
+        m = -(objective.split(stress[p], s) - K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt)
         objective.assemble(s, -m, stress[p])
         state[p] = ELASTIC
         if not (may_yield(s, m, sin_phi, two_c_cos) or m > cutoff):

@@ -104,16 +104,8 @@ def assemble(s, p, sigma):
         sigma[a, a] -= p
 
 
-# Inlined into the callers' particle loops (numba IR): as a call it made J2's update 1.36x
-# slower (docs/benchmarks.md, "Speed, third part").
-@njit(cache=True, inline="always")
-def trial_stress(Lp, sigma, dt, K, G, D, W, Q, tmp, s):
-    """The elastic trial of a hypoelastic-plastic step: sigma rotated by the spin of Lp,
-    its deviator s <- s + 2 G dt dev(D); returns the trial pressure p - K tr(D) dt
-    (D, W, Q, tmp: 3x3 scratch)."""
-    rate_tensors(Lp, D, W)
-    rotate(sigma, W, dt, Q, tmp)
-    pressure = split(sigma, s)
-    tr = add_deviatoric_rate(s, D, 2.0 * G * dt)
-    pressure -= K * tr * dt
-    return pressure
+# The elastic trial of a hypoelastic-plastic step is these four calls in the plastic models'
+# particle loops (J2, Drucker-Prager, Mohr-Coulomb): rate_tensors(L_p, D, W); rotate(sigma_p,
+# W, dt, Q, tmp); p = split(sigma_p, s); p -= K add_deviatoric_rate(s, D, 2 G dt) dt. Written
+# once as a function, inlined by numba (inline="always") or called, the J2 kernel took 1.5x
+# and 2x as long as with the calls written out (docs/benchmarks.md, "Speed, fifth part").
