@@ -44,21 +44,25 @@ VARIANTS = {   # key: (label, dimension, contact, conduction)
 }
 
 
-def run_variant(key: str, out: Path, threads: int, rerun: bool) -> dict:
-    label, dim, contact, conduction = VARIANTS[key]
-    scene = variant(dim, contact, conduction)
+def kept_run(scene: dict, folder: Path, threads: int, rerun: bool) -> tuple[Path, float]:
+    """The result file of the scene run into `folder` (run now unless kept there already, or
+    `rerun`) and the run's wall time (NaN for a kept run that recorded none)."""
     scene.setdefault("parallel", {})["threads"] = threads
-    folder = out / key
-    result_file = folder / "result.h5"
+    result_file, wall_file = folder / "result.h5", folder / "wall_seconds"
     if rerun or not result_file.exists():
         start = time.perf_counter()
         result = run(scene, folder)
         wall = time.perf_counter() - start
         if result.status != "complete":
-            raise SystemExit(f"{key}: {result.status}: {result.message}")
-        (folder / "wall_seconds").write_text(f"{wall}\n")
-    wall_file = folder / "wall_seconds"
-    wall = float(wall_file.read_text()) if wall_file.exists() else float("nan")
+            raise SystemExit(f"{folder.name}: {result.status}: {result.message}")
+        wall_file.write_text(f"{wall}\n")
+    return result_file, float(wall_file.read_text()) if wall_file.exists() else float("nan")
+
+
+def run_variant(key: str, out: Path, threads: int, rerun: bool) -> dict:
+    label, dim, contact, conduction = VARIANTS[key]
+    scene = variant(dim, contact, conduction)
+    result_file, wall = kept_run(scene, out / key, threads, rerun)
     series = read_series(result_file)
     final = read_frame(result_file, -1)
     measures = splat_measures(final, scene)
@@ -141,17 +145,7 @@ def trend_scene(resolution: str, contact: str, speed: float, size: float) -> dic
 
 def run_trend(resolution: str, contact: str, speed: float, size: float, out: Path, threads: int, rerun: bool) -> dict:
     scene = trend_scene(resolution, contact, speed, size)
-    scene.setdefault("parallel", {})["threads"] = threads
-    folder = out / f"trend_{resolution}_{contact}_{speed:.0f}_{size:g}"
-    result_file = folder / "result.h5"
-    if rerun or not result_file.exists():
-        start = time.perf_counter()
-        result = run(scene, folder)
-        wall = time.perf_counter() - start
-        if result.status != "complete":
-            raise SystemExit(f"{folder.name}: {result.status}: {result.message}")
-        (folder / "wall_seconds").write_text(f"{wall}\n")
-    wall_file = folder / "wall_seconds"
+    result_file, wall = kept_run(scene, out / f"trend_{resolution}_{contact}_{speed:.0f}_{size:g}", threads, rerun)
     series = read_series(result_file)
     final = read_frame(result_file, -1)
     peaks = [splat_measures(read_frame(result_file, frame["index"]), scene) for frame in list_frames(result_file)]
@@ -160,7 +154,7 @@ def run_trend(resolution: str, contact: str, speed: float, size: float, out: Pat
         "resolution": resolution, "contact": contact, "speed": speed, "d0": 20.0 * size,
         "T_powder_peak": max(p["T_powder"] for p in peaks), "T_substrate_peak": max(p["T_substrate"] for p in peaks),
         "kinetic_end": series["kinetic_energy"][-1] / series["kinetic_energy"][0],
-        "steps": len(series["time"]) - 1, "wall": float(wall_file.read_text()) if wall_file.exists() else float("nan"),
+        "steps": len(series["time"]) - 1, "wall": wall,
     }
 
 
