@@ -49,6 +49,15 @@ AXES = "xyz"
 
 # -- the fields ------------------------------------------------------------------
 
+def domain_support(scene, support: int) -> int:
+    """The stencil width the slabs' halo must cover (solver/parallel): the density-gradient
+    normals spread a particle over its cell's neighbours too (S2, [R] 5.9), one more node
+    layer on each side than the shape function's stencil."""
+    if scene.contact.fields and scene.contact.normals == "density_gradient":
+        return support + 2
+    return support
+
+
 @njit(parallel=True, cache=True)
 def fields_and_normals(spec, idx, body, field_of_body, n_nodes, w, dw, mass, volume, presence, gradient,
                        copies_presence, copies_gradient):
@@ -96,13 +105,11 @@ def quadratic_spline(d):
 
 
 @njit(cache=True)
-def cell_densities(x, body, field_of_body, weight, lower, inv_h, cells, density):
-    """rho_c = sum_p w_p S2(x_p - x_c) / V_e ([R] 5.9) per field, at the cell centres;
-    density is (fields * cells) with cells numbered x fastest. Serial (a scatter)."""
+def cell_densities(x, body, field_of_body, weight, lower, inv_h, cells, strides, n_nodes, density):
+    """rho_c = sum_p w_p S2(x_p - x_c) / V_e ([R] 5.9) per field, at the cell centres; held at
+    each cell's lower-corner node (density is a nodal array, fields * n_nodes), so that the
+    slabs' halo exchange sums and shares them as it does nodal sums. Serial (a scatter)."""
     dim = x.shape[1]
-    n_cells = 1
-    for a in range(dim):
-        n_cells *= cells[a]
     volume = 1.0
     for a in range(dim):
         volume /= inv_h[a]
@@ -112,13 +119,12 @@ def cell_densities(x, body, field_of_body, weight, lower, inv_h, cells, density)
         for a in range(dim):
             s[a] = (x[p, a] - lower[a]) * inv_h[a] - 0.5   # in cells, from the first centre
             base[a] = int(math.floor(s[a] + 0.5)) - 1
-        first = field_of_body[body[p]] * n_cells
+        first = field_of_body[body[p]] * n_nodes
         for k in range(3**dim):
             value = weight[p] / volume
-            cell = first
+            node = first
             inside = True
             r = k
-            stride = 1
             for a in range(dim):
                 c = base[a] + r % 3
                 r //= 3
@@ -126,16 +132,16 @@ def cell_densities(x, body, field_of_body, weight, lower, inv_h, cells, density)
                     inside = False
                     break
                 value *= quadratic_spline(s[a] - c)
-                cell += c * stride
-                stride *= cells[a]
+                node += c * strides[a]
             if inside:
-                density[cell] += value
+                density[node] += value
 
 
 @njit(cache=True)
 def density_normals(density, cells, inv_h, fields, n_nodes, strides, gradient):
     """n_I = sum_c grad phi_I(x_c) rho_c ([R] 5.11) over the cells holding node I, phi the linear
-    hat: at a cell centre d phi/d x_a = +-(1/h_a) / 2^(dim-1)."""
+    hat: at a cell centre d phi/d x_a = +-(1/h_a) / 2^(dim-1); rho_c at the cell's lower-corner
+    node (cell_densities)."""
     dim = cells.shape[0]
     n_cells = 1
     for a in range(dim):
@@ -143,14 +149,14 @@ def density_normals(density, cells, inv_h, fields, n_nodes, strides, gradient):
     scale = 1.0 / 2 ** (dim - 1)
     for f in range(fields):
         for c in range(n_cells):
-            rho = density[f * n_cells + c]
-            if rho == 0.0:
-                continue
             node0 = f * n_nodes
             r = c
             for a in range(dim):
                 node0 += (r % cells[a]) * strides[a]
                 r //= cells[a]
+            rho = density[node0]
+            if rho == 0.0:
+                continue
             for corner in range(1 << dim):
                 node = node0
                 for a in range(dim):
@@ -415,12 +421,26 @@ class FieldContact:
         fields_and_normals(sim.spec, s.idx, p.body, self.field_of_body, g.n_nodes, s.w, s.dw, p.mass, p.volume,
                            self.presence, self.gradient, sim.copies.mass, sim.copies.force)
         if self.normals == "density_gradient":
-            weight = np.where(p.mass > 0.0, p.mass, p.volume)
-            self.gradient.fill(0.0)
-            density = np.zeros(g.fields * int(np.prod(g.cells)))
-            cell_densities(p.x, p.body, self.field_of_body, weight, g.lower, g.inv_h, g.cells, density)
-            density_normals(density, g.cells, g.inv_h, g.fields, g.n_nodes, g.strides, self.gradient)
+            self._density_normals(sim)
         sim.domain.sum_ghosts(self.presence, self.gradient)
+
+    def _density_normals(self, sim) -> None:
+        """[R] 5.9-5.11: the cell densities summed over the slabs and shared back (a cell's
+        particles may sit on a neighbour's slab: `domain_support` widened the halo by the
+        spline's reach), the normals from them on every node, kept on the owned ones only:
+        the caller's sum over the slabs then adds nothing twice."""
+        p, g = sim.particles, self.grid
+        weight = np.where(p.mass > 0.0, p.mass, p.volume)
+        self.gradient.fill(0.0)
+        density = np.zeros(g.fields * g.n_nodes)
+        cell_densities(p.x, p.body, self.field_of_body, weight, g.lower, g.inv_h, g.cells, g.strides, g.n_nodes,
+                       density)
+        sim.domain.sum_ghosts(density)
+        sim.domain.share_nodes(density)
+        density_normals(density, g.cells, g.inv_h, g.fields, g.n_nodes, g.strides, self.gradient)
+        if not self.owned.all():
+            for rows in g.field_views(self.gradient):
+                rows[~self.owned] = 0.0
 
     def before_update(self, sim, dt: float) -> None:
         self._dt = dt

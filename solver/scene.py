@@ -958,10 +958,6 @@ def _contact_problems(scene: Scene, names: dict[str, int]) -> list[tuple[str, st
         problems.append(("contact.model", f"{contact.model!r} needs formulation 'ulmpm' (the per-body fields are "
                                           f"grid fields of the updated-Lagrangian step; TLMPM takes `tools`)"))
     problems += _field_conflicts(scene)
-    if contact.normals == "density_gradient" and scene.parallel.processes > 1:
-        problems.append(("contact.normals", f"'density_gradient' is not supported yet with several processes "
-                                            f"(parallel.processes = {scene.parallel.processes}): the cell "
-                                            f"densities of the slabs' edges are not exchanged; use 'mass_gradient'"))
     nodes = int(np.prod([n + 1 for n in scene.grid_shape()])) if scene.grid.lower is not None else 0
     needed = scene.grid_fields() * nodes * 8 * (2 + 4 * scene.dimension)   # grid arrays, normals, presence
     if needed > capabilities.MAX_CONTACT_FIELD_BYTES:

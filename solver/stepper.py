@@ -14,6 +14,7 @@ import numpy as np
 from solver import energy, kernels, parallel, shape, step, thermal, threads
 from solver.axisymmetric import Axisymmetry
 from solver.boundary import ConditionReactions
+from solver.contact import domain_support
 from solver.energy import Energies
 from solver.errors import SolverError
 from solver.loads import AppliedLoads, BodyLoads
@@ -82,7 +83,7 @@ class ExplicitMPM:
         self.phases = step.backend_for(scene, general)(self)
         self.added_hooks = []   # hooks given by add_hook, kept when the grid is placed again
         # One process: the whole grid. K processes: this one's slab of it (solver/parallel).
-        self.domain = parallel.decompose(scene, self.shape.SUPPORT)
+        self.domain = parallel.decompose(scene, domain_support(scene, self.shape.SUPPORT))
         self.domain.distribute(self.particles)
         self.axisymmetry = Axisymmetry(scene, self.particles) if scene.axisymmetric else None
         self.rigid = RigidBodies(scene, self.particles, self.domain)

@@ -40,6 +40,8 @@ CASES = {
     "contact": scene(SCENE_2D, contact={"model": "friction", "friction": 0.3},
                      boundary_conditions=[{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.2}]),
     "contact-rigid": scene(RIGID_2D, contact={"model": "friction", "friction": 0.2}),
+    # the cell-density normals ([R] 5.9-5.11): the cell densities are summed and shared over the slabs
+    "contact-density": scene(SCENE_2D, contact={"model": "friction", "friction": 0.3, "normals": "density_gradient"}),
     # heat with a field per body: the disks (400 and 300 K) meet across the slab cut at x = 0.5,
     # exchange heat where they touch and are heated by their friction (solver/thermal.py)
     "heat-contact": scene(HEAT_2D, contact={"model": "friction", "friction": 0.3}),
@@ -61,7 +63,7 @@ CASES = {
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
-        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2),
+        ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2), ("contact-density", 2), ("contact-density", 3),
         ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2), ("tools", 2), ("tools-tlmpm", 2)]
 
 

@@ -196,9 +196,15 @@ def test_fields_beyond_memory_are_refused(monkeypatch):
     assert "velocity fields (one per body)" in found["contact.model"]
 
 
-def test_density_normals_with_processes_are_refused():
-    found = problems({"model": "friction", "normals": "density_gradient"}, parallel={"processes": 2})
-    assert "with several processes" in found["contact.normals"]
+def test_density_normals_with_processes_are_accepted_and_widen_the_halo():
+    # the cell densities cross the slabs (tests/parallel/test_equivalence.py "contact-density")
+    from solver.contact import domain_support
+    scene = copy.deepcopy(BASE)
+    scene["contact"] = {"model": "friction", "normals": "density_gradient"}
+    scene["parallel"] = {"processes": 2}
+    assert domain_support(load_scene(scene), 2) == 4
+    scene["contact"]["normals"] = "mass_gradient"
+    assert domain_support(load_scene(scene), 2) == 2
 
 
 def test_one_field_features_are_refused_with_a_field_per_body():
