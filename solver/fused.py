@@ -57,12 +57,13 @@ USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docs
 
 
 @functools.cache
-def kernels(dim: int, thermal: bool = False):
+def kernels(dim: int, thermal: bool = False, contact: bool = False):
     """The module of the fused kernels for `dim` dimensions: `p2g` and `g2p`
     (generated from solver/fused_template.py, see there); with `thermal` the kernels that
-    carry heat conduction as well (a separate module: scenes without it keep theirs)."""
+    carry heat conduction as well, with `contact` those of a velocity field per body
+    (separate modules: scenes without them keep theirs)."""
     from solver import fused_template
-    return fused_template.load(dim, thermal)
+    return fused_template.load(dim, thermal, contact)
 
 
 _CONSTANTS = [np.empty((0,) * n) for n in range(1, 5)]
