@@ -281,11 +281,13 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
         _p2g_particle(dim, thermal, contact),
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
+         *(["    if copies_presence.shape[0] > 0:", "        add_node_copies(presence, copies_presence)",
+            "        add_node_copies(gradient, copies_gradient)"] if contact else []),
          "else:",
-         "    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)",
-         *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else []),
-         *(["if copies_presence.shape[0] > 0:", "    add_node_copies(presence, copies_presence)",
-            "    add_node_copies(gradient, copies_gradient)"] if contact else [])])
+         *(["    _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom,",
+            "                   copies_force, copies_presence, copies_gradient)"] if contact else
+           ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]),
+         *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])])
 
 
 # -- G2P ---------------------------------------------------------------------------
@@ -450,7 +452,8 @@ def source(dim: int, thermal: bool = False, contact: bool = False) -> str:
     `thermal`, the kernels that carry conduction too, with `contact` those that step a
     velocity field per body (a scene without them never loads those: its module's text, and
     so its kernels, are those of a template without heat or contact)."""
-    return "\n".join([HEADER.format(dim=dim), *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
+    header = HEADER.format(dim=dim) + ("\nfrom solver.fused import _reduce_fields" if contact else "")
+    return "\n".join([header, *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
 
 
 def _stem(dim: int, thermal: bool, contact: bool) -> str:
