@@ -6,8 +6,9 @@
 The scene is examples/two_disks.json (--scale k: cells k times smaller and the disks'
 particles k^2 times more), advanced to t = 1.55 s, where the disks touch (from 1.525 s), then timed over
 --steps steps in three variants, alternately, --repeats times each: the single field as
-the scene steps it (the fused backend), the single field on the general backend (the
-one contact uses), and `"contact": {"model": "friction", "friction": 0.3}`. The table
+the scene steps it (the fused backend), the single field on the general backend, and
+`"contact": {"model": "friction", "friction": 0.3}` on the backend the scene gets (the
+fused one with the default mass-gradient normals; its line names it). The table
 gives each variant's median time per step and the ratios contact / single field; the
 spread is max/min - 1 of the repeats (the machine's noise at that moment).
 
@@ -45,7 +46,7 @@ def placed(variant: str, scale: int, threads: int):
     from solver.scene import load_scene
     from solver.stepper import ExplicitMPM
     s = load_scene(scene(scale, threads, variant.startswith("contact"), variant == "contact-heat"))
-    sim = ExplicitMPM(s, general=variant != "fused")
+    sim = ExplicitMPM(s, general=variant == "general")
     while sim.time < 1.55:   # the disks touch from 1.525 s
         sim.advance(s.time.dt)
     return sim, s.time.dt
@@ -85,7 +86,8 @@ def main() -> None:
     median = {v: statistics.median(t) for v, t in times.items()}
     for v in variants:
         spread = max(times[v]) / min(times[v]) - 1
-        print(f"  {v:12s} {median[v] * 1e6:9.1f} us/step   spread {spread:5.1%}")
+        backend = sims[v][0].phases.name
+        print(f"  {v:12s} {median[v] * 1e6:9.1f} us/step   spread {spread:5.1%}   ({backend})")
     print(f"  contact / single field (fused)   {median['contact'] / median['fused']:.2f}")
     print(f"  contact / single field (general) {median['contact'] / median['general']:.2f}")
     if args.heat:

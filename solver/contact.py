@@ -398,6 +398,11 @@ class FieldContact:
         size, dim = grid.mass.shape[0], scene.dimension
         self.presence = np.zeros(size)
         self.gradient = np.zeros((size, dim))
+        # the fused P2G scatters presence and gradient itself, into copies of its own (the grid's
+        # copies are in use then); the general pass borrows the grid's (solver/step/fused.py)
+        copies = sim.threads - 1 if sim.phases.carries_contact else 0
+        self.copies_presence = np.zeros((copies, size))
+        self.copies_gradient = np.zeros((copies, size, dim))
         self.impulse = sim.rigid.impulse   # the rigid bodies' reactions come from the contact
         self.pair_impulse = np.zeros((grid.fields, grid.fields, 2))
         self.owned = sim.domain.owned_mask(grid)
@@ -414,7 +419,9 @@ class FieldContact:
         """Stencils into the fields; the volume each field gives the nodes, and the fields' normals
         from the particles' weights w_p (the mass; a rigid particle, which carries none, its
         volume: only the direction of its field's normal counts). Once a step, before any grid
-        velocity is formed."""
+        velocity is formed. On the fused backend its P2G does both (`after_forces` sums the ghosts)."""
+        if sim.phases.carries_contact:
+            return
         p, s, g = sim.particles, sim.stencil, self.grid
         self.presence.fill(0.0)
         self.gradient.fill(0.0)
@@ -441,6 +448,11 @@ class FieldContact:
         if not self.owned.all():
             for rows in g.field_views(self.gradient):
                 rows[~self.owned] = 0.0
+
+    def after_forces(self, sim) -> None:
+        """The fused P2G's presence and normals, summed onto their owners (processes)."""
+        if sim.phases.carries_contact:
+            sim.domain.sum_ghosts(self.presence, self.gradient)
 
     def before_update(self, sim, dt: float) -> None:
         self._dt = dt

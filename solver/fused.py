@@ -57,12 +57,13 @@ USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docs
 
 
 @functools.cache
-def kernels(dim: int, thermal: bool = False):
+def kernels(dim: int, thermal: bool = False, contact: bool = False):
     """The module of the fused kernels for `dim` dimensions: `p2g` and `g2p`
     (generated from solver/fused_template.py, see there); with `thermal` the kernels that
-    carry heat conduction as well (a separate module: scenes without it keep theirs)."""
+    carry heat conduction as well, with `contact` those of a velocity field per body
+    (separate modules: scenes without them keep theirs)."""
     from solver import fused_template
-    return fused_template.load(dim, thermal)
+    return fused_template.load(dim, thermal, contact)
 
 
 _CONSTANTS = [np.empty((0,) * n) for n in range(1, 5)]
@@ -129,3 +130,28 @@ def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
             grid_mass[i] += copies_mass[t, i]
             for a in range(dim):
                 grid_mom[i, a] += copies_mom[t, i, a]
+
+
+@njit(cache=True)
+def _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
+                   copies_presence, copies_gradient):
+    """`_reduce` of a P2G that scattered the contact's presence and normals too (solver/contact.py)."""
+    if copies_mass.shape[0] > 0:
+        _add_field_copies(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
+                          copies_presence, copies_gradient)
+
+
+@njit(parallel=True, cache=True)
+def _add_field_copies(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
+                      copies_presence, copies_gradient):
+    """As solver/threads.py's add_copies with the contact's presence and gradient: one parallel
+    loop over the nodes, not three (each is a wait for the slowest thread), the same sums."""
+    n, dim = grid_mom.shape
+    for i in prange(n):
+        for t in range(copies_mass.shape[0]):
+            grid_mass[i] += copies_mass[t, i]
+            presence[i] += copies_presence[t, i]
+            for a in range(dim):
+                grid_mom[i, a] += copies_mom[t, i, a]
+                grid_force[i, a] += copies_force[t, i, a]
+                gradient[i, a] += copies_gradient[t, i, a]

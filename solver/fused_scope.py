@@ -13,8 +13,12 @@ def supports(scene) -> bool:
     linear or quadratic B-spline weights, 2D or 3D, no axisymmetry, rigid body, heat
     conduction with USL (its one G2P pass moves x_p before the flux gather, which needs
     x_p^t: MUSL's kinematics pass has it) or with frictional walls (their heat goes into
-    T~_I^{t+dt} before the particles take it: solver/thermal.py), per-body contact fields, and for APIC and MLS a shape function whose D_p
-    is a constant times h^2 (its declared `apic_d`)."""
+    T~_I^{t+dt} before the particles take it: solver/thermal.py), and for APIC and MLS a shape
+    function whose D_p is a constant times h^2 (its declared `apic_d`). Per-body contact fields
+    are fused with the mass-gradient normals ([R] 5.12, scattered by the fused P2G; the density
+    gradient's cell pass reads the particles apart) and without conduction (the fields'
+    exchange and the frictional heat enter T~_I^{t+dt} before the particles take it, as the
+    frictional walls' do); rigid bodies, which contact also meets, are not fused at all."""
     method = scene.method
     return (method.formulation == "ulmpm" and method.scheme in ("usl", "musl")
             and method.shape_function in FUSED_SHAPES and not scene.axisymmetric
@@ -22,9 +26,13 @@ def supports(scene) -> bool:
             and not any(m.model == "rigid" for m in scene.materials.values())
             and (method.scheme == "musl" or not conducts(scene))
             and not (conducts(scene) and _friction_walls(scene))   # their heat enters T~ before the remap
-            and not scene.contact.fields   # the per-body fields need the stored stencil (solver/contact.py)
+            and (not scene.contact.fields or _fused_contact(scene))
             and (method.transfer not in ("apic", "mls") or shape.REGISTRY[method.shape_function].apic_d is not None))
 
 
 def _friction_walls(scene) -> bool:
     return any(getattr(bc, "mode", None) == "friction" for bc in scene.boundary_conditions)
+
+
+def _fused_contact(scene) -> bool:
+    return scene.contact.normals == "mass_gradient" and not conducts(scene)

@@ -112,16 +112,17 @@ def _gradient(dim: int) -> list[str]:
     return [f"dwx = gx[i] * {_outer(dim)}"] + [f"dw{AXES[a]} = wx[i] * {_outer(dim, a)}" for a in range(1, dim)]
 
 
-def _stencil(dim: int, body: list[str], gradients: bool) -> list[str]:
+def _stencil(dim: int, body: list[str], gradients: bool, contact: bool) -> list[str]:
     """The loops over the S^dim nodes of a particle's stencil, outer axis first, around
-    `body` (which sees node, d{c} of the outer axes and their products, `_outer`)."""
+    `body` (which sees node, d{c} of the outer axes and their products, `_outer`); with
+    `contact` the nodes are those of the particle's body's field (+ shift, `_field_shift`)."""
     lines, level = [], 0
     for a in range(dim - 1, 0, -1):
         c, i = AXES[a], LOOPS[a]
         lines += _indent([f"for {i} in range(S):", f"    d{c} = ({i} - f{c}) * h[{a}]"], level)
         level += 1
     row = " + ".join(f"(i{AXES[a]} + {LOOPS[a]}) * strides[{a}]" for a in range(1, dim))
-    lines += _indent([f"row = {row} - offset", *_products(dim, gradients),
+    lines += _indent([f"row = {row} - offset" + (" + shift" if contact else ""), *_products(dim, gradients),
                       "for i in range(S):", "    node = row + ix + i   # (strides[0] is 1: x fastest)"], level)
     return lines + _indent(body, level + 1)
 
@@ -148,10 +149,11 @@ def _axes(dim: int, ok: bool) -> list[str]:
 
 # -- P2G ---------------------------------------------------------------------------
 
-def _p2g_node(dim: int, thermal: bool) -> list[str]:
+def _p2g_node(dim: int, thermal: bool, contact: bool) -> list[str]:
     """What one particle adds to one node: mass, momentum (APIC term), force; `fold`:
     mass and q = mv + dt f only (the force is in mv and mc, `_p2g_particle`); with
-    `thermal` the conduction's C_I, (C T)_I, Q_I (`_heat_p2g_node`; never folded)."""
+    `thermal` the conduction's C_I, (C T)_I, Q_I (`_heat_p2g_node`; never folded); with
+    `contact` the contact's presence and normals (`_contact_p2g_node`; never folded)."""
     def force(a):
         return _each(f"s{a}{{a}} * dw{{c}}", dim, " - ")
     return [
@@ -176,6 +178,7 @@ def _p2g_node(dim: int, thermal: bool) -> list[str]:
         "else:",
         *[f"    {_scatter('gf', f'node, {a}', '-=', force(a).replace(' - ', ' + '))}" for a in range(dim)],
         *(_heat_p2g_node(dim) if thermal else []),
+        *(_contact_p2g_node(dim) if contact else []),
     ]
 
 
@@ -195,7 +198,25 @@ def _heat_p2g_node(dim: int) -> list[str]:
     ]
 
 
-def _p2g_particle(dim: int, thermal: bool) -> list[str]:
+def _contact_p2g_node(dim: int) -> list[str]:
+    """The contact's sums per field (solver/contact.py's `fields_and_normals`): presence_I +=
+    V_p w and the mass-gradient normal gradient_I += m_p grad w ([R] 5.12), with the gradient
+    the general backend's stencil holds (MLS: w D_p^-1 (x_I - x_p); dw here is w (x_I - x_p))."""
+    return [
+        _scatter("pr", "node", "+=", "vol * w"),
+        "if mls:",
+        *_indent([_scatter("gr", f"node, {a}", "+=", f"m * (dw{AXES[a]} * d_inv{a})") for a in range(dim)], 1),
+        "else:",
+        *_indent([_scatter("gr", f"node, {a}", "+=", f"m * dw{AXES[a]}") for a in range(dim)], 1),
+    ]
+
+
+def _field_shift(contact: bool) -> list[str]:
+    """The first entry of the particle's body's field in the nodal arrays (solver/contact.py)."""
+    return ["shift = field_of_body[body[p]] * n_nodes"] if contact else []
+
+
+def _p2g_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
     mc = [f"mc{a}{b}" for a in range(dim) for b in range(dim)]
     return [
         *_axes(dim, ok=True),
@@ -223,15 +244,18 @@ def _p2g_particle(dim: int, thermal: bool) -> list[str]:
         *(["mcap = m * capacity[p]   # 0 for a material without conduction: it adds zeros (the general",
            "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
            f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
-        *_stencil(dim, _p2g_node(dim, thermal), gradients=True),
+        *_field_shift(contact),
+        *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact),
     ]
 
 
-def _p2g(dim: int, thermal: bool) -> list[str]:
+def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
     return _shell(
         "p2g(variant, x, v, C, mass, volume, stress, acc, frame, d_inv, grid_mass, grid_mom, grid_force,\n"
         "        copies_mass, copies_mom, copies_force, bad, dt"
-        + (",\n        capacity, T, heat_flux, heat, copies_heat)" if thermal else ")"),
+        + (",\n        capacity, T, heat_flux, heat, copies_heat" if thermal else "")
+        + (",\n        body, field_of_body, n_nodes, presence, gradient, copies_presence, copies_gradient"
+           if contact else "") + ")",
         "m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =\n"
         "    sum_p m_p w b_p - V_p sigma_p grad w (MLS: w D_p^-1 (x_I - x_p) for grad w). bad[t]: first\n"
         "    particle of block t outside the grid. `fold` (MLS only): f_I is not formed, dt f_I is\n"
@@ -239,7 +263,9 @@ def _p2g(dim: int, thermal: bool) -> list[str]:
         "    variant: (support, affine, loaded, mls, fold) constants; frame: (lower, h, inv_h, cells,\n"
         "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
         "    the other threads."
-        + ("\n\n    Conduction: heat (n, 3) gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p." if thermal else ""),
+        + ("\n\n    Conduction: heat (n, 3) gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p." if thermal else "")
+        + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes;\n"
+           "    presence gets V_p w and gradient m_p grad w per field (zeroed by the caller)." if contact else ""),
         ["support, affine_, loaded_, mls_, fold_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
@@ -250,12 +276,17 @@ def _p2g(dim: int, thermal: bool) -> list[str]:
          "fold = fold_.ndim == 2",
          "gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
          "gf = grid_force if fold else own(t, grid_force, copies_force)",
-         *(["th = own(t, heat, copies_heat)"] if thermal else [])],
-        _p2g_particle(dim, thermal),
+         *(["th = own(t, heat, copies_heat)"] if thermal else []),
+         *(["pr, gr = own(t, presence, copies_presence), own(t, gradient, copies_gradient)"] if contact else [])],
+        _p2g_particle(dim, thermal, contact),
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
+         *(["    if copies_presence.shape[0] > 0:", "        add_node_copies(presence, copies_presence)",
+            "        add_node_copies(gradient, copies_gradient)"] if contact else []),
          "else:",
-         "    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)",
+         *(["    _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom,",
+            "                   copies_force, copies_presence, copies_gradient)"] if contact else
+           ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]),
          *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])])
 
 
@@ -296,7 +327,7 @@ def _heat_g2p_gather(dim: int) -> list[str]:
     ]
 
 
-def _g2p_remap(dim: int, thermal: bool) -> list[str]:
+def _g2p_remap(dim: int, thermal: bool, contact: bool) -> list[str]:
     """MUSL: the particle's new momentum m w (v_p + C_p (x_I - x_p)) back to the grid (with
     `thermal`: T_p += dT_p, and w m c T_p into `remapped`, Algorithm 8 lines 12-13)."""
     node = [
@@ -317,7 +348,7 @@ def _g2p_remap(dim: int, thermal: bool) -> list[str]:
         f"    {_each('rate[p, {a}]', dim)} = {_each('vp{c}', dim)}",
         "    m = mass[p]",
         *(heat if thermal else []),
-        *_indent(_stencil(dim, node, gradients=False), 1),
+        *_indent(_stencil(dim, node, gradients=False, contact=contact), 1),
         "    continue",
     ]
 
@@ -343,7 +374,7 @@ def _determinant(rows: list[int], columns: list[int]) -> str:
     return text
 
 
-def _g2p_particle(dim: int, thermal: bool) -> list[str]:
+def _g2p_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
     matrix = [f"{{}}{a}{b}" for a in range(dim) for b in range(dim)]
     return [
         *_axes(dim, ok=False),
@@ -351,7 +382,8 @@ def _g2p_particle(dim: int, thermal: bool) -> list[str]:
         _zeros([m.format("b") for m in matrix]),
         _zeros([m.format("l") for m in matrix]),
         *([_zeros(["dT"] + [f"tq{c}" for c in AXES[:dim]]), "kp = conductivity[p]"] if thermal else []),
-        *_stencil(dim, _g2p_gather(dim, thermal), gradients=True),
+        *_field_shift(contact),
+        *_stencil(dim, _g2p_gather(dim, thermal), gradients=True, contact=contact),
         "if mode != KINEMATICS:",
         "    if blend:",
         *_indent(_each_line("v[p, {a}] = flip * (v[p, {a}] + dv{c}) + (1.0 - flip) * vp{c}", dim), 2),
@@ -359,7 +391,7 @@ def _g2p_particle(dim: int, thermal: bool) -> list[str]:
         f"        {_each('v[p, {a}]', dim)} = {_each('vp{c}', dim)}",
         "    if affine:",
         *_indent(_tensor("C[p, {a}, {b}] = b{a}{b} * d_inv{b}", dim), 2),
-        *_g2p_remap(dim, thermal),
+        *_g2p_remap(dim, thermal, contact),
         *(["if mode == KINEMATICS:   # q_p = -k_p sum grad w T_I^{t+dt}",
            *_indent(_each_line("heat_flux[p, {a}] = -kp * tq{c}", dim), 1)] if thermal else []),
         "if mode == USL:",
@@ -377,12 +409,13 @@ def _g2p_particle(dim: int, thermal: bool) -> list[str]:
     ]
 
 
-def _g2p(dim: int, thermal: bool) -> list[str]:
+def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
     return _shell(
         "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
         "        flip, dt, d_inv, copies_mom, bad"
-        + (",\n        capacity, T, conductivity, heat_flux, T_old, T_grid, remapped, copies_remapped)"
-           if thermal else ")"),
+        + (",\n        capacity, T, conductivity, heat_flux, T_old, T_grid, remapped, copies_remapped"
+           if thermal else "")
+        + (",\n        body, field_of_body, n_nodes" if contact else "") + ")",
         "USL: v_p (PIC/FLIP blend), C_p = B_p D_p^-1, x_p += dt v_pic, and L_p, F_p, V_p\n"
         "    from v_new. REMAP: v_p and C_p only, v_pic into `rate`, and the new momentum\n"
         "    m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:\n"
@@ -392,7 +425,9 @@ def _g2p(dim: int, thermal: bool) -> list[str]:
         "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS)."
         + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w (T_grid - T_old) and sum w m c T_p into\n"
            "    `remapped` (zeroed by the caller); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
-           "    then being the remapped T_I^{t+dt}." if thermal else ""),
+           "    then being the remapped T_I^{t+dt}." if thermal else "")
+        + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes."
+           if contact else ""),
         ["support, mode_, affine_, blend_, mls_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          "threads = copies_mom.shape[0] + 1",
@@ -403,7 +438,7 @@ def _g2p(dim: int, thermal: bool) -> list[str]:
          "mode = mode_.ndim - 1",
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
          *(["tr = own(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
-        _g2p_particle(dim, thermal),
+        _g2p_particle(dim, thermal, contact),
         ["if remaps and copies_mom.shape[0] > 0:",
          "    add_node_copies(grid_mom, copies_mom)",
          *(["if remaps and copies_remapped.shape[0] > 0:", "    add_node_copies(remapped, copies_remapped)"]
@@ -412,22 +447,24 @@ def _g2p(dim: int, thermal: bool) -> list[str]:
 
 # -- the generated module ------------------------------------------------------------
 
-def source(dim: int, thermal: bool = False) -> str:
+def source(dim: int, thermal: bool = False, contact: bool = False) -> str:
     """The text of the module of the fused kernels for `dim` (2 or 3) dimensions; with
-    `thermal`, the kernels that carry conduction too (a scene without it never loads them:
-    its module's text, and so its kernels, are those of a template without heat)."""
-    return "\n".join([HEADER.format(dim=dim), *_p2g(dim, thermal), *_g2p(dim, thermal)]) + "\n"
+    `thermal`, the kernels that carry conduction too, with `contact` those that step a
+    velocity field per body (a scene without them never loads those: its module's text, and
+    so its kernels, are those of a template without heat or contact)."""
+    header = HEADER.format(dim=dim) + ("\nfrom solver.fused import _reduce_fields" if contact else "")
+    return "\n".join([header, *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
 
 
-def _stem(dim: int, thermal: bool) -> str:
-    return f"fused_{dim}d" + ("_thermal" if thermal else "")
+def _stem(dim: int, thermal: bool, contact: bool) -> str:
+    return f"fused_{dim}d" + ("_thermal" if thermal else "") + ("_contact" if contact else "")
 
 
-def write(dim: int, thermal: bool = False) -> Path:
+def write(dim: int, thermal: bool = False, contact: bool = False) -> Path:
     """The generated file for `dim`, (re)written only when its text changed (solver/generated.py)."""
-    return generated.write("fused", _stem(dim, thermal), source(dim, thermal))
+    return generated.write("fused", _stem(dim, thermal, contact), source(dim, thermal, contact))
 
 
-def load(dim: int, thermal: bool = False):
+def load(dim: int, thermal: bool = False, contact: bool = False):
     """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
-    return generated.load("fused", _stem(dim, thermal), source(dim, thermal))
+    return generated.load("fused", _stem(dim, thermal, contact), source(dim, thermal, contact))

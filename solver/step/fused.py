@@ -7,7 +7,11 @@ stored stencil. USL's G2P and kinematics are one pass; MUSL's remap keeps v_pic
 Heat conduction (MUSL only, fused_scope) rides in the same passes, in kernels generated
 for conducting scenes alone: P2G adds C_I, (C T)_I, Q_I; the REMAP pass updates T_p and
 maps m c T_p back; the KINEMATICS pass, after the conduction hook formed the remapped
-T_I^{t+dt}, gathers q_p. The hook (solver/thermal.py) keeps the node passes."""
+T_I^{t+dt}, gathers q_p. The hook (solver/thermal.py) keeps the node passes.
+
+Contact with a field per body (mass-gradient normals, fused_scope) rides in kernels generated
+for it: every pass shifts each particle's nodes into its body's field, and P2G scatters the
+contact's presence and normals too; the hook (solver/contact.py) keeps the correction."""
 from __future__ import annotations
 
 import numpy as np
@@ -20,6 +24,7 @@ from solver.step.phases import Phases
 class FusedPhases(Phases):
     name = "fused"
     carries_conduction = True   # the conduction hook leaves its particle passes to these kernels
+    carries_contact = True      # the contact hook leaves its stencil shift and normals to them
 
     @staticmethod
     def supports(scene) -> bool:
@@ -32,7 +37,8 @@ class FusedPhases(Phases):
         sim.formulation.place_particles(sim.particles)
         method = sim.scene.method
         self._support = fused.support_of(method.shape_function)
-        self._kernels = fused.kernels(sim.scene.dimension, thermal=sim.conduction is not None)
+        self._kernels = fused.kernels(sim.scene.dimension, thermal=sim.conduction is not None,
+                                      contact=sim.field_contact is not None)
         apic_d = shape.REGISTRY[method.shape_function].apic_d
         # APIC's (and MLS's) D_p^-1 per axis (unused without them); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
@@ -64,8 +70,8 @@ class FusedPhases(Phases):
         """Whether P2G adds dt f_I into (mv)_I instead of forming f_I: MLS (so that a node's
         dt f_I / m_I is bounded as its velocity is, the force being w-weighted like the momentum),
         no FLIP blend and no hook that reads or adds to f_I or reads v_I^t (loads on nodes,
-        damping, absorbing faces, conduction: after_forces and before_update; contact fields
-        are not fused). v_I^t is then not formed: the grid update gives q_I / m_I for both
+        damping, absorbing faces, conduction: after_forces and before_update; contact fields too,
+        whose normals need the grad w a folded P2G does not form). v_I^t is then not formed: the grid update gives q_I / m_I for both
         v_I^t and v~_I^{t+dt}, and v~_I^{t+dt} equals the unfolded step's to round-off, except
         on nodes below the mass cut-off, where the unfolded step drops dt f_I / m_I (their
         weight in any particle's gather is below 1e-9: docs/benchmarks.md, issue 18 third part)."""
@@ -79,7 +85,7 @@ class FusedPhases(Phases):
         variant = self._p2g_variants[self.folds_force()]
         self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc, self._frame,
                           self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt,
-                          *self._heat_p2g())
+                          *self._heat_p2g(), *self._contact_p2g())
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -105,7 +111,7 @@ class FusedPhases(Phases):
         p, g, bad = sim.particles, sim.grid, self._bad
         self._kernels.g2p(self._g2p_variants[mode], p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume,
                           p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, dt,
-                          self._d_inv, sim.copies.momentum, bad, *self._heat_g2p(mode))
+                          self._d_inv, sim.copies.momentum, bad, *self._heat_g2p(mode), *self._contact_g2p())
         sim.check_inversion(first_of(bad))
 
     # -- conduction (nothing without it) ----------------------------------------------------
@@ -129,3 +135,21 @@ class FusedPhases(Phases):
             conduction.remapped.fill(0.0)
         return (x["heat_capacity"], x["temperature"], x["conductivity"], x["heat_flux"], conduction.T_old,
                 conduction.T_new, conduction.remapped, conduction.copies_remapped)
+
+    # -- contact with a field per body (nothing without it) -----------------------------------
+
+    def _contact_p2g(self) -> tuple:
+        """The contact kernels' extra P2G arguments: the fields and the normals' arrays (zeroed)."""
+        contact = self.sim.field_contact
+        if contact is None:
+            return ()
+        contact.presence.fill(0.0)
+        contact.gradient.fill(0.0)
+        return (self.sim.particles.body, contact.field_of_body, self.sim.grid.n_nodes, contact.presence,
+                contact.gradient, contact.copies_presence, contact.copies_gradient)
+
+    def _contact_g2p(self) -> tuple:
+        contact = self.sim.field_contact
+        if contact is None:
+            return ()
+        return self.sim.particles.body, contact.field_of_body, self.sim.grid.n_nodes

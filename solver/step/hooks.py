@@ -18,8 +18,8 @@ calls the method of every hook that has one, in the order the hooks were made
 | end_step(sim, dt)                   | after the scheme: rigid moves, work of the loads     |
 
 The scene's hooks, in `HOOKS` order: rigid bodies (begin_step, constrain, end_step),
-contact with a field per body (after_weights, before_update, constrain: solver/contact.py;
-the rigid bodies then only move and their fields meet the others there),
+contact with a field per body (after_weights, after_forces, before_update, constrain:
+solver/contact.py; the rigid bodies then only move and their fields meet the others there),
 boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 (end_step), the applied `loads` (after_forces, end_step: solver/loads.py), the `tools`
 (begin_step, after_forces, end_step, their reaction series: solver/tools.py), `absorbing`
@@ -32,7 +32,8 @@ corners of cpdi_q4 and cpdi_tet4, after_g2p).
 A hook that needs the stored stencil (the hoop terms) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Conduction's particle passes
 ride inside the fused kernels of a MUSL scene (`Phases.carries_conduction`); its node passes
-stay in the hook. Ghost sums and halo
+stay in the hook. So do the contact fields' shift and normals (`Phases.carries_contact`: the
+hook then only sums the normals' ghosts at after_forces and corrects the fields). Ghost sums and halo
 shares are not hooks: they complete each grid phase, after every hook of the point
 has added its part (solver/step/phases.py).
 """

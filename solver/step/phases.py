@@ -27,6 +27,7 @@ class Phases:
     """The phases of one simulation's step; `sim` holds the state (solver/stepper.py)."""
 
     carries_conduction = False   # whether the backend's kernels do conduction's particle passes (fused)
+    carries_contact = False      # whether they step the contact's fields and scatter its normals (fused)
 
     def __init__(self, sim):
         self.sim = sim

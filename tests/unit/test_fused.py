@@ -225,3 +225,69 @@ def test_a_scene_without_heat_loads_the_kernels_of_a_template_without_heat():
         assert "capacity" not in plain and "heat" not in plain
         assert "heat_flux" in thermal
     assert ExplicitMPM(load_scene(SCENE_2D)).phases._kernels is fused.kernels(2)
+
+
+# -- contact with a velocity field per body -----------------------------------------
+
+CONTACT = {"model": "friction", "friction": 0.3}
+
+
+def in_contact(dimension: int, method: str, threads: int) -> dict:
+    """The two bodies of SCENE_2D/3D, each in a field of its own, meeting from the first steps."""
+    return {**(SCENE_2D if dimension == 2 else SCENE_3D), "method": METHODS[method], "contact": CONTACT,
+            "parallel": {"threads": threads}}
+
+
+@pytest.mark.parametrize("dimension,method,threads", [
+    (2, "musl-linear-flip", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-apic", 2), (2, "usl-quadratic-mls", 1),
+    (3, "musl-linear-flip", 2), (3, "usl-quadratic-flip", 1), (3, "musl-quadratic-apic", 1),
+    (3, "musl-quadratic-mls", 2)])
+def test_fused_contact_gives_the_general_step(dimension, method, threads):
+    """The fused kernels shift each particle's nodes into its body's field and scatter the
+    contact's presence and normals in P2G, as the hook's pass over the stored stencil does:
+    the same sums in the same order (2D: the same bits but for MLS's D_p; 3D: the weights'
+    round-off of the module docstring), so the states and the pair forces agree to 1e-12."""
+    scene = load_scene(in_contact(dimension, method, threads))
+    fast, general = ExplicitMPM(scene), ExplicitMPM(scene, general=True)
+    assert fast.fused and not general.fused
+    forces = []
+    for step in range(STEPS):
+        fast.advance(2e-4)
+        general.advance(2e-4)
+        if step % 10 == 9:
+            forces.append((fast.hooks.series(), general.hooks.series()))
+    a, b = fast.particles, general.particles
+    assert np.max(np.abs(b.stress[:, 0, 0])) > 300.0   # the bodies did collide
+    for name in ("x", "v", "F", "stress", "volume"):
+        assert relative_difference(getattr(a, name), getattr(b, name)) <= TOLERANCE, name
+    normal = [series["contact_left_right_normal"] for _, series in forces]
+    assert max(normal) > 0.0   # the contact acted
+    for fast_series, general_series in forces:
+        assert fast_series.keys() == general_series.keys()
+        for key, value in general_series.items():
+            assert fast_series[key] == pytest.approx(value, rel=TOLERANCE, abs=TOLERANCE * max(normal)), key
+
+
+@pytest.mark.parametrize("contact,expected", [
+    (CONTACT, True),
+    ({**CONTACT, "normals": "density_gradient"}, False),   # the cells' densities are a pass of their own
+    ({"model": "single_field"}, True),
+])
+def test_fused_contact_takes_the_mass_gradient_normals(contact, expected):
+    assert fused.supports(load_scene({**SCENE_2D, "contact": contact})) is expected
+
+
+def test_contact_with_conduction_keeps_the_general_backend():
+    """The fields' heat exchange and the frictional heat enter T~_I^{t+dt} before the particles
+    take it, as a frictional wall's (solver/thermal.py)."""
+    scene = conducting(2, "musl-linear-flip", 1)
+    assert not fused.supports(load_scene({**scene, "contact": CONTACT}))
+
+
+def test_a_scene_without_contact_loads_the_kernels_of_a_template_without_contact():
+    for dimension in (2, 3):
+        plain, fields = fused_template.source(dimension), fused_template.source(dimension, contact=True)
+        assert "shift" not in plain and "presence" not in plain
+        assert "field_of_body" in fields and "presence" in fields
+    sim = ExplicitMPM(load_scene({**SCENE_2D, "contact": CONTACT}))
+    assert sim.phases._kernels is fused.kernels(2, contact=True) and sim.stencil is None

@@ -289,7 +289,8 @@ def disk_normals(normals, h=0.05, radius=0.2):
              "contact": {"model": "friction", "normals": normals},
              "time": {"end": 1.0}, "output": {"frames": 2}}
     sim = ExplicitMPM(load_scene(scene))
-    sim.phases.weights()   # the contact hook's normals come with the weights
+    sim.phases.weights()   # the contact hook's normals come with the weights (general backend)
+    sim.phases.particles_to_grid(0.0)   # or with P2G (fused: solver/step/fused.py)
     contact = next(h for h in sim.hooks._hooks if hasattr(h, "gradient"))
     return sim.grid.node_positions(), contact.presence, contact.gradient
 
