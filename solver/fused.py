@@ -133,6 +133,45 @@ def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
 
 
 @njit(cache=True)
+def _reduce_heat(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force, copies_heat):
+    """`_reduce` of a P2G that scattered conduction's C_I, (C T)_I, Q_I too (solver/thermal.py)."""
+    if copies_mass.shape[0] > 0:
+        _add_heat_copies(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force, copies_heat)
+
+
+@njit(parallel=True, cache=True)
+def _add_heat_copies(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force, copies_heat):
+    """As solver/threads.py's add_copies with the heat's three columns: one parallel loop over
+    the nodes, not two (each is a wait for the slowest thread), the same sums."""
+    n, dim = grid_mom.shape
+    for i in prange(n):
+        for t in range(copies_mass.shape[0]):
+            grid_mass[i] += copies_mass[t, i]
+            for a in range(dim):
+                grid_mom[i, a] += copies_mom[t, i, a]
+                grid_force[i, a] += copies_force[t, i, a]
+            for c in range(3):
+                heat[i, c] += copies_heat[t, i, c]
+
+
+@njit(cache=True)
+def _reduce_remap(grid_mom, remapped, copies_mom, copies_remapped):
+    """The REMAP pass's copies with conduction: the momentum and the remapped m c T together."""
+    if copies_mom.shape[0] > 0:
+        _add_remap_copies(grid_mom, remapped, copies_mom, copies_remapped)
+
+
+@njit(parallel=True, cache=True)
+def _add_remap_copies(grid_mom, remapped, copies_mom, copies_remapped):
+    n, dim = grid_mom.shape
+    for i in prange(n):
+        for t in range(copies_mom.shape[0]):
+            remapped[i] += copies_remapped[t, i]
+            for a in range(dim):
+                grid_mom[i, a] += copies_mom[t, i, a]
+
+
+@njit(cache=True)
 def _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
                    copies_presence, copies_gradient):
     """`_reduce` of a P2G that scattered the contact's presence and normals too (solver/contact.py)."""

@@ -52,6 +52,9 @@ from numba import njit, prange
 
 from solver.fused import KINEMATICS, REMAP, USL, _axis, _reduce, _reduce_mass_momentum
 from solver.threads import add_node_copies, block_bounds, own'''
+THERMAL_IMPORTS = """
+from solver.fused import _reduce_heat, _reduce_remap
+from solver.threads import own_zeroed"""
 
 
 # -- text helpers ------------------------------------------------------------------
@@ -263,7 +266,8 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
         "    variant: (support, affine, loaded, mls, fold) constants; frame: (lower, h, inv_h, cells,\n"
         "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
         "    the other threads."
-        + ("\n\n    Conduction: heat (n, 3) gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p." if thermal else "")
+        + ("\n\n    Conduction: heat (n, 3), zeroed here, gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p."
+           if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes;\n"
            "    presence gets V_p w and gradient m_p grad w per field (zeroed by the caller)." if contact else ""),
         ["support, affine_, loaded_, mls_, fold_ = variant",
@@ -276,7 +280,7 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
          "fold = fold_.ndim == 2",
          "gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
          "gf = grid_force if fold else own(t, grid_force, copies_force)",
-         *(["th = own(t, heat, copies_heat)"] if thermal else []),
+         *(["th = own_zeroed(t, heat, copies_heat)"] if thermal else []),
          *(["pr, gr = own(t, presence, copies_presence), own(t, gradient, copies_gradient)"] if contact else [])],
         _p2g_particle(dim, thermal, contact),
         ["if fold_.ndim == 2:",
@@ -284,10 +288,20 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
          *(["    if copies_presence.shape[0] > 0:", "        add_node_copies(presence, copies_presence)",
             "        add_node_copies(gradient, copies_gradient)"] if contact else []),
          "else:",
-         *(["    _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom,",
-            "                   copies_force, copies_presence, copies_gradient)"] if contact else
-           ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]),
-         *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])])
+         *_p2g_reduce(thermal, contact)])
+
+
+def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
+    """The unfolded P2G's sum of the threads' copies: one parallel loop over the nodes for all
+    the arrays it scattered (each loop ends in a wait for the slowest thread)."""
+    if contact:
+        return ["    _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom,",
+                "                   copies_force, copies_presence, copies_gradient)",
+                *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])]
+    if thermal:
+        return ["    _reduce_heat(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force,",
+                "                 copies_heat)"]
+    return ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]
 
 
 # -- G2P ---------------------------------------------------------------------------
@@ -314,12 +328,13 @@ def _g2p_gather(dim: int, thermal: bool) -> list[str]:
 
 def _heat_g2p_gather(dim: int) -> list[str]:
     """Conduction's gathers, in the order of solver/thermal_kernels.py's sums: the REMAP pass
-    takes dT_p = sum w (T~_I - T_I) (Algorithm 8, line 12); the KINEMATICS pass, which runs
+    takes dT_p = sum w (T~_I - T_I) (Algorithm 8, line 12; the hook formed T~_I - T_I, the same
+    bits as the difference taken here, one read less); the KINEMATICS pass, which runs
     after the remapped T_I^{t+dt} was formed and still has x_p^t, the flux's sum grad w T_I
     (line 15; MLS: its gradient w D_p^-1 (x_I - x_p), as the general stencil holds it)."""
     return [
         "if mode == REMAP:",
-        "    dT += w * (T_grid[node] - T_old[node])",
+        "    dT += w * T_change[node]",
         "if mode == KINEMATICS and kp != 0.0:",
         "    if mls:",
         *_indent(_each_line("dw{c} = w * d{c} * d_inv{a}", dim), 2),
@@ -413,7 +428,7 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
     return _shell(
         "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
         "        flip, dt, d_inv, copies_mom, bad"
-        + (",\n        capacity, T, conductivity, heat_flux, T_old, T_grid, remapped, copies_remapped"
+        + (",\n        capacity, T, conductivity, heat_flux, T_change, T_grid, remapped, copies_remapped"
            if thermal else "")
         + (",\n        body, field_of_body, n_nodes" if contact else "") + ")",
         "USL: v_p (PIC/FLIP blend), C_p = B_p D_p^-1, x_p += dt v_pic, and L_p, F_p, V_p\n"
@@ -423,8 +438,8 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
         "    bad[t]: first particle of block t whose J = det F is not positive.\n\n"
         "    variant: (support, mode, affine, blend, mls) constants; frame: (lower, h, inv_h, cells,\n"
         "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS)."
-        + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w (T_grid - T_old) and sum w m c T_p into\n"
-           "    `remapped` (zeroed by the caller); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
+        + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w T_change (T~_I - T_I) and sum w m c T_p into\n"
+           "    `remapped` (zeroed here); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
            "    then being the remapped T_I^{t+dt}." if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes."
            if contact else ""),
@@ -437,12 +452,11 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
          "   # compile-time constants",
          "mode = mode_.ndim - 1",
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
-         *(["tr = own(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
+         *(["tr = own_zeroed(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
         _g2p_particle(dim, thermal, contact),
-        ["if remaps and copies_mom.shape[0] > 0:",
-         "    add_node_copies(grid_mom, copies_mom)",
-         *(["if remaps and copies_remapped.shape[0] > 0:", "    add_node_copies(remapped, copies_remapped)"]
-           if thermal else [])])
+        ["if remaps:", "    _reduce_remap(grid_mom, remapped, copies_mom, copies_remapped)"]
+        if thermal else
+        ["if remaps and copies_mom.shape[0] > 0:", "    add_node_copies(grid_mom, copies_mom)"])
 
 
 # -- the generated module ------------------------------------------------------------
@@ -452,7 +466,8 @@ def source(dim: int, thermal: bool = False, contact: bool = False) -> str:
     `thermal`, the kernels that carry conduction too, with `contact` those that step a
     velocity field per body (a scene without them never loads those: its module's text, and
     so its kernels, are those of a template without heat or contact)."""
-    header = HEADER.format(dim=dim) + ("\nfrom solver.fused import _reduce_fields" if contact else "")
+    header = (HEADER.format(dim=dim) + (THERMAL_IMPORTS if thermal else "")
+              + ("\nfrom solver.fused import _reduce_fields" if contact else ""))
     return "\n".join([header, *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
 
 

@@ -223,6 +223,7 @@ class Conduction:
         self.n_nodes = sim.grid.n_nodes
         self.heat = np.zeros((n, 3))
         self.T_old, self.T_new, self.remapped = np.zeros(n), np.zeros(n), np.zeros(n)
+        self.T_change = np.zeros(n)   # T~_I - T_I, which the fused REMAP pass reads
         self.copies_heat = np.zeros((sim.threads - 1, n, 3))
         self.copies_remapped = np.zeros((sim.threads - 1, n))
         self.held = sim.domain.owned(self._held_whole, sim.grid)
@@ -264,6 +265,8 @@ class Conduction:
         thermal_kernels.hold(self.held.node, self.T_now, self.n_nodes, self.T_old)
         thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_old, self.T_new)
+        if sim.phases.carries_conduction:
+            np.subtract(self.T_new, self.T_old, out=self.T_change)
 
     def _exchange(self, sim) -> None:
         """Contact and frictional walls, before the particles take the grid's temperature change:

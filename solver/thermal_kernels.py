@@ -49,15 +49,14 @@ def _p2g_block(dims, nodes, start, stop, idx, w, dw, mass, capacity, T, volume, 
             heat[node, 2] += vol * q
 
 
-# The nodal kernels are serial: a pass over the nodes costs less than waking the
-# threads (measured 7-13 ms per parallel region on a loaded 2-core machine, against
-# 0.1 ms for 40k nodes on one core).
+# The two passes over every node are threaded; those over a face's or a contact's nodes
+# stay serial (fewer nodes than it costs to wake the threads).
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def integrate(dt, heat, cutoff, T_old, T_new):
     """T_I^t = (C T)_I / C_I (eq. 5.25) and T~_I^{t+dt} = T_I^t + dt Q_I / C_I (Algorithm 8,
     line 9) where the node has capacity; 0 elsewhere."""
-    for i in range(heat.shape[0]):
+    for i in prange(heat.shape[0]):
         if heat[i, 0] > cutoff:
             T_old[i] = heat[i, 1] / heat[i, 0]
             T_new[i] = T_old[i] + dt * heat[i, 2] / heat[i, 0]
@@ -200,10 +199,10 @@ def _g2p_remap_block(nodes, start, stop, idx, w, T_old, T_new, mass, capacity, T
             remapped[idx[p, k]] += w[p, k] * mct
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def remapped_temperature(heat, remapped, cutoff, T_grid):
     """T_I^{t+dt} = remapped_I / C_I^t (line 13)."""
-    for i in range(heat.shape[0]):
+    for i in prange(heat.shape[0]):
         T_grid[i] = remapped[i] / heat[i, 0] if heat[i, 0] > cutoff else 0.0
 
 

@@ -122,18 +122,15 @@ class FusedPhases(Phases):
         conduction = self.sim.conduction
         if conduction is None:
             return ()
-        x = self.sim.particles.extra
-        conduction.heat.fill(0.0)
+        x = self.sim.particles.extra   # (the kernel zeroes heat, each thread its array)
         return x["heat_capacity"], x["temperature"], x["heat_flux"], conduction.heat, conduction.copies_heat
 
     def _heat_g2p(self, mode: int) -> tuple:
         conduction = self.sim.conduction
         if conduction is None:
             return ()
-        x = self.sim.particles.extra
-        if mode == fused.REMAP:
-            conduction.remapped.fill(0.0)
-        return (x["heat_capacity"], x["temperature"], x["conductivity"], x["heat_flux"], conduction.T_old,
+        x = self.sim.particles.extra   # (the REMAP kernel zeroes remapped)
+        return (x["heat_capacity"], x["temperature"], x["conductivity"], x["heat_flux"], conduction.T_change,
                 conduction.T_new, conduction.remapped, conduction.copies_remapped)
 
     # -- contact with a field per body (nothing without it) -----------------------------------
