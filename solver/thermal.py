@@ -223,7 +223,7 @@ class Conduction:
         self.n_nodes = sim.grid.n_nodes
         self.heat = np.zeros((n, 3))
         self.T_old, self.T_new, self.remapped = np.zeros(n), np.zeros(n), np.zeros(n)
-        self.T_change = np.zeros(n)   # T~_I - T_I, which the fused REMAP pass reads
+        self.T_change = np.zeros(n)   # T~_I - T_I, which the fused REMAP pass reads (solver/thermal_kernels.py)
         self.copies_heat = np.zeros((sim.threads - 1, n, 3))
         self.copies_remapped = np.zeros((sim.threads - 1, n))
         self.held = sim.domain.owned(self._held_whole, sim.grid)
@@ -257,16 +257,18 @@ class Conduction:
         rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
                                              faces.ambient, self.faces.axis, self.n_nodes, self.heat, self.cutoff)
         self.boundary_heat += dt * rate
-        thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new)
+        thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new, self.T_change)
         if not self.exchanges:   # (else once the step's frictional heat is known: after_g2p)
             self._hold_and_share(sim)
 
     def _hold_and_share(self, sim) -> None:
         thermal_kernels.hold(self.held.node, self.T_now, self.n_nodes, self.T_old)
         thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
-        sim.domain.share_nodes(self.T_old, self.T_new)
-        if sim.phases.carries_conduction:
-            np.subtract(self.T_new, self.T_old, out=self.T_change)
+        if sim.phases.carries_conduction:   # (never with exchanges, which change T~ after integrate)
+            thermal_kernels.hold_change(self.held.node, self.T_now, self.held.value, self.n_nodes, self.T_change)
+            sim.domain.share_nodes(self.T_old, self.T_new, self.T_change)
+        else:
+            sim.domain.share_nodes(self.T_old, self.T_new)
 
     def _exchange(self, sim) -> None:
         """Contact and frictional walls, before the particles take the grid's temperature change:
