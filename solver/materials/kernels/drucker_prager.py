@@ -43,11 +43,11 @@ def _update(L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c,
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c, cutoff):
     # scratch per block, in this serial function: never shared between threads
-    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
         # the Jaumann trial stress, written out (kernels/objective.py says why)
         objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt, Q, tmp)
+        objective.rotate(stress[p], W, dt)
         m_trial = -(objective.split(stress[p], s) - K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt)
         j_trial = objective.von_mises(s) / math.sqrt(3.0)     # sqrt(J2)
         m, j, state[p] = return_map(m_trial, j_trial, K, G, eta, eta_bar, xi_c, cutoff)

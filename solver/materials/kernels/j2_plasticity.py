@@ -34,11 +34,11 @@ def _update(L, stress, eps_p, volume, work, dt, K, G, yield_stress, H, threads):
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, eps_p, volume, work, dt, K, G, yield_stress, H):
     # scratch per block, in this serial function: never shared between threads (nor in one cache line)
-    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
         # the Jaumann trial stress, written out (kernels/objective.py says why)
         objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt, Q, tmp)
+        objective.rotate(stress[p], W, dt)
         pressure = objective.split(stress[p], s)
         pressure -= K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt
         q = objective.von_mises(s)

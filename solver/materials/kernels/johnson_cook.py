@@ -134,13 +134,13 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, work, dmg, d_init, dt, 
 def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, work, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
                   fail_prm):
     # scratch per block, in this serial function: never shared between threads (nor in one cache line)
-    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     damaged = dmg.shape[0] > 0
     accumulates = d_init.shape[0] > 0
     fastest = 0.0
     for p in range(lo, hi):
         objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt, Q, tmp)
+        objective.rotate(stress[p], W, dt)
         objective.split(stress[p], s)
         d = dmg[p] if damaged else 0.0
         g = (1.0 - d) * G

@@ -195,7 +195,7 @@ def _update(L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, c
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, cohesion, cutoff):
     # scratch per block, in this serial function: never shared between threads
-    D, W, Q, tmp, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     A, V = np.empty((3, 3)), np.empty((3, 3))
     values, trial, sig = np.empty(3), np.empty(3), np.empty(3)
     planes, scratch, order = np.empty((2, 2), np.int64), np.empty((7, 3)), np.empty(3, np.int64)
@@ -204,7 +204,7 @@ def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_p
     for p in range(lo, hi):
         # the Jaumann trial stress, written out (kernels/objective.py says why)
         objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt, Q, tmp)
+        objective.rotate(stress[p], W, dt)
         m = -(objective.split(stress[p], s) - K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt)
         objective.assemble(s, -m, stress[p])
         state[p] = ELASTIC
