@@ -49,8 +49,9 @@ def _p2g_block(dims, nodes, start, stop, idx, w, dw, mass, capacity, T, volume, 
             heat[node, 2] += vol * q
 
 
-# The two passes over every node are threaded; those over a face's or a contact's nodes
-# stay serial (fewer nodes than it costs to wake the threads).
+# The two passes every conducting step makes over all nodes (integrate, remapped_temperature)
+# are threaded; the others stay serial: a face's nodes are fewer than it costs to wake the
+# threads, and the contact's exchanges run on the general backend only.
 
 @njit(parallel=True, cache=True)
 def integrate(dt, heat, cutoff, T_old, T_new, T_change):
