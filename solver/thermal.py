@@ -221,6 +221,7 @@ class Conduction:
         the conditions on the nodes it owns."""
         n = sim.grid.mass.shape[0]
         self.n_nodes = sim.grid.n_nodes
+        self.threads = sim.threads
         self.heat = np.zeros((n, 3))
         self.T_old, self.T_new, self.remapped = np.zeros(n), np.zeros(n), np.zeros(n)
         self.T_change = np.zeros(n)   # T~_I - T_I, which the fused REMAP pass reads (solver/thermal_kernels.py)
@@ -257,7 +258,11 @@ class Conduction:
         rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
                                              faces.ambient, self.faces.axis, self.n_nodes, self.heat, self.cutoff)
         self.boundary_heat += dt * rate
-        thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new, self.T_change)
+        if self.threads > 1:
+            thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new, self.T_change, self.threads)
+        else:
+            thermal_kernels.integrate_block(0, self.heat.shape[0], dt, self.heat, self.cutoff, self.T_old, self.T_new,
+                                            self.T_change)
         if not self.exchanges:   # (else once the step's frictional heat is known: after_g2p)
             self._hold_and_share(sim)
 
@@ -297,7 +302,11 @@ class Conduction:
             thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
                                       x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
-        thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new)
+        if self.threads > 1:
+            thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new, self.threads)
+        else:
+            thermal_kernels.remapped_temperature_block(0, self.heat.shape[0], self.heat, self.remapped, self.cutoff,
+                                                       self.T_new)
         if self.contact is not None:   # the flux at a contact node: from the touching fields' one temperature
             thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
         thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)

@@ -50,16 +50,26 @@ def _p2g_block(dims, nodes, start, stop, idx, w, dw, mass, capacity, T, volume, 
 
 
 # The two passes every conducting step makes over all nodes (integrate, remapped_temperature)
-# are threaded; the others stay serial: a face's nodes are fewer than it costs to wake the
+# are threaded, one block of nodes a thread; with one thread the hook calls the block function
+# itself (a parallel region of one thread costs about 1 us a call, 2 % of a small scene's step).
+# The other node passes stay serial: a face's nodes are fewer than it costs to wake the
 # threads, and the contact's exchanges run on the general backend only.
 
 @njit(parallel=True, cache=True)
-def integrate(dt, heat, cutoff, T_old, T_new, T_change):
+def integrate(dt, heat, cutoff, T_old, T_new, T_change, blocks):
+    """`integrate_block` over all nodes, one block a thread."""
+    bounds = block_bounds(heat.shape[0], blocks)
+    for t in prange(blocks):
+        integrate_block(bounds[t], bounds[t + 1], dt, heat, cutoff, T_old, T_new, T_change)
+
+
+@njit(cache=True)
+def integrate_block(start, stop, dt, heat, cutoff, T_old, T_new, T_change):
     """T_I^t = (C T)_I / C_I (eq. 5.25) and T~_I^{t+dt} = T_I^t + dt Q_I / C_I (Algorithm 8,
     line 9) where the node has capacity; 0 elsewhere. T_change = T~_I - T_I, which the fused
     REMAP pass reads, formed here by the thread that wrote the node (a pass of its own after
     this one read the other thread's nodes from its cache: 10-40 us a step on 40k nodes)."""
-    for i in prange(heat.shape[0]):
+    for i in range(start, stop):
         if heat[i, 0] > cutoff:
             T_old[i] = heat[i, 1] / heat[i, 0]
             T_new[i] = T_old[i] + dt * heat[i, 2] / heat[i, 0]
@@ -213,9 +223,17 @@ def _g2p_remap_block(nodes, start, stop, idx, w, T_old, T_new, mass, capacity, T
 
 
 @njit(parallel=True, cache=True)
-def remapped_temperature(heat, remapped, cutoff, T_grid):
+def remapped_temperature(heat, remapped, cutoff, T_grid, blocks):
+    """`remapped_temperature_block` over all nodes, one block a thread."""
+    bounds = block_bounds(heat.shape[0], blocks)
+    for t in prange(blocks):
+        remapped_temperature_block(bounds[t], bounds[t + 1], heat, remapped, cutoff, T_grid)
+
+
+@njit(cache=True)
+def remapped_temperature_block(start, stop, heat, remapped, cutoff, T_grid):
     """T_I^{t+dt} = remapped_I / C_I^t (line 13)."""
-    for i in prange(heat.shape[0]):
+    for i in range(start, stop):
         T_grid[i] = remapped[i] / heat[i, 0] if heat[i, 0] > cutoff else 0.0
 
 
