@@ -115,7 +115,8 @@ def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_for
 
 @njit(cache=True)
 def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
-    """`_reduce` of a P2G that folded the force into the momentum (no force copies to add)."""
+    """`_reduce` of a P2G that folded the force into the momentum (no force copies to add); also
+    the REMAP pass's with conduction, its remapped m c T in the place of the mass."""
     if copies_mass.shape[0] > 0:
         _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom)
 
@@ -133,16 +134,20 @@ def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
 
 
 @njit(cache=True)
-def _reduce_heat(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force, copies_heat):
-    """`_reduce` of a P2G that scattered conduction's C_I, (C T)_I, Q_I too (solver/thermal.py)."""
+def _reduce_with(grid_mass, grid_mom, grid_force, extra, more, copies_mass, copies_mom, copies_force, copies_extra,
+                 copies_more):
+    """`_reduce` of a P2G that scattered two more nodal arrays, (n, k) each (conduction: the heat and
+    an empty one; contact: the presence as (n, 1) and the normals' gradient)."""
     if copies_mass.shape[0] > 0:
-        _add_heat_copies(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force, copies_heat)
+        _add_copies_with(grid_mass, grid_mom, grid_force, extra, more, copies_mass, copies_mom, copies_force,
+                         copies_extra, copies_more)
 
 
 @njit(parallel=True, cache=True)
-def _add_heat_copies(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force, copies_heat):
-    """As solver/threads.py's add_copies with the heat's three columns: one parallel loop over
-    the nodes, not two (each is a wait for the slowest thread), the same sums."""
+def _add_copies_with(grid_mass, grid_mom, grid_force, extra, more, copies_mass, copies_mom, copies_force,
+                     copies_extra, copies_more):
+    """As solver/threads.py's add_copies with `extra` and `more`: one parallel loop over the nodes for
+    all of them, not one each (each loop ends in a wait for the slowest thread); the same sums."""
     n, dim = grid_mom.shape
     for i in prange(n):
         for t in range(copies_mass.shape[0]):
@@ -150,47 +155,7 @@ def _add_heat_copies(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_
             for a in range(dim):
                 grid_mom[i, a] += copies_mom[t, i, a]
                 grid_force[i, a] += copies_force[t, i, a]
-            for c in range(3):
-                heat[i, c] += copies_heat[t, i, c]
-
-
-@njit(cache=True)
-def _reduce_remap(grid_mom, remapped, copies_mom, copies_remapped):
-    """The REMAP pass's copies with conduction: the momentum and the remapped m c T together."""
-    if copies_mom.shape[0] > 0:
-        _add_remap_copies(grid_mom, remapped, copies_mom, copies_remapped)
-
-
-@njit(parallel=True, cache=True)
-def _add_remap_copies(grid_mom, remapped, copies_mom, copies_remapped):
-    n, dim = grid_mom.shape
-    for i in prange(n):
-        for t in range(copies_mom.shape[0]):
-            remapped[i] += copies_remapped[t, i]
-            for a in range(dim):
-                grid_mom[i, a] += copies_mom[t, i, a]
-
-
-@njit(cache=True)
-def _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
-                   copies_presence, copies_gradient):
-    """`_reduce` of a P2G that scattered the contact's presence and normals too (solver/contact.py)."""
-    if copies_mass.shape[0] > 0:
-        _add_field_copies(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
-                          copies_presence, copies_gradient)
-
-
-@njit(parallel=True, cache=True)
-def _add_field_copies(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom, copies_force,
-                      copies_presence, copies_gradient):
-    """As solver/threads.py's add_copies with the contact's presence and gradient: one parallel
-    loop over the nodes, not three (each is a wait for the slowest thread), the same sums."""
-    n, dim = grid_mom.shape
-    for i in prange(n):
-        for t in range(copies_mass.shape[0]):
-            grid_mass[i] += copies_mass[t, i]
-            presence[i] += copies_presence[t, i]
-            for a in range(dim):
-                grid_mom[i, a] += copies_mom[t, i, a]
-                grid_force[i, a] += copies_force[t, i, a]
-                gradient[i, a] += copies_gradient[t, i, a]
+            for c in range(extra.shape[1]):
+                extra[i, c] += copies_extra[t, i, c]
+            for c in range(more.shape[1]):
+                more[i, c] += copies_more[t, i, c]

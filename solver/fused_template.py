@@ -53,7 +53,7 @@ from numba import njit, prange
 from solver.fused import KINEMATICS, REMAP, USL, _axis, _reduce, _reduce_mass_momentum
 from solver.threads import add_node_copies, block_bounds, own'''
 THERMAL_IMPORTS = """
-from solver.fused import _reduce_heat, _reduce_remap
+from solver.fused import _reduce_with
 from solver.threads import own_zeroed"""
 
 
@@ -294,13 +294,15 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
 def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
     """The unfolded P2G's sum of the threads' copies: one parallel loop over the nodes for all
     the arrays it scattered (each loop ends in a wait for the slowest thread)."""
-    if contact:
-        return ["    _reduce_fields(grid_mass, grid_mom, grid_force, presence, gradient, copies_mass, copies_mom,",
-                "                   copies_force, copies_presence, copies_gradient)",
+    if contact:   # (the presence as (n, 1): `_reduce_with` takes (n, k) arrays)
+        return ["    _reduce_with(grid_mass, grid_mom, grid_force, presence.reshape((presence.shape[0], 1)), gradient,",
+                "                 copies_mass, copies_mom, copies_force,",
+                "                 copies_presence.reshape((copies_presence.shape[0], copies_presence.shape[1], 1)),",
+                "                 copies_gradient)",
                 *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])]
-    if thermal:
-        return ["    _reduce_heat(grid_mass, grid_mom, grid_force, heat, copies_mass, copies_mom, copies_force,",
-                "                 copies_heat)"]
+    if thermal:   # (with an empty second array)
+        return ["    _reduce_with(grid_mass, grid_mom, grid_force, heat, heat[:, :0], copies_mass, copies_mom,",
+                "                 copies_force, copies_heat, copies_heat[:, :, :0])"]
     return ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]
 
 
@@ -454,7 +456,7 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
          *(["tr = own_zeroed(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
         _g2p_particle(dim, thermal, contact),
-        ["if remaps:", "    _reduce_remap(grid_mom, remapped, copies_mom, copies_remapped)"]
+        ["if remaps:", "    _reduce_mass_momentum(remapped, grid_mom, copies_remapped, copies_mom)"]
         if thermal else
         ["if remaps and copies_mom.shape[0] > 0:", "    add_node_copies(grid_mom, copies_mom)"])
 
@@ -467,7 +469,7 @@ def source(dim: int, thermal: bool = False, contact: bool = False) -> str:
     velocity field per body (a scene without them never loads those: its module's text, and
     so its kernels, are those of a template without heat or contact)."""
     header = (HEADER.format(dim=dim) + (THERMAL_IMPORTS if thermal else "")
-              + ("\nfrom solver.fused import _reduce_fields" if contact else ""))
+              + ("\nfrom solver.fused import _reduce_with" if contact and not thermal else ""))
     return "\n".join([header, *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
 
 
