@@ -285,8 +285,6 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
         _p2g_particle(dim, thermal, contact),
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
-         *(["    if copies_presence.shape[0] > 0:", "        add_node_copies(presence, copies_presence)",
-            "        add_node_copies(gradient, copies_gradient)"] if contact else []),
          "else:",
          *_p2g_reduce(thermal, contact)])
 
@@ -298,8 +296,7 @@ def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
         return ["    _reduce_with(grid_mass, grid_mom, grid_force, presence.reshape((presence.shape[0], 1)), gradient,",
                 "                 copies_mass, copies_mom, copies_force,",
                 "                 copies_presence.reshape((copies_presence.shape[0], copies_presence.shape[1], 1)),",
-                "                 copies_gradient)",
-                *(["if copies_heat.shape[0] > 0:", "    add_node_copies(heat, copies_heat)"] if thermal else [])]
+                "                 copies_gradient)"]
     if thermal:   # (with an empty second array)
         return ["    _reduce_with(grid_mass, grid_mom, grid_force, heat, heat[:, :0], copies_mass, copies_mom,",
                 "                 copies_force, copies_heat, copies_heat[:, :, :0])"]
@@ -468,8 +465,10 @@ def source(dim: int, thermal: bool = False, contact: bool = False) -> str:
     `thermal`, the kernels that carry conduction too, with `contact` those that step a
     velocity field per body (a scene without them never loads those: its module's text, and
     so its kernels, are those of a template without heat or contact)."""
+    if thermal and contact:
+        raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
     header = (HEADER.format(dim=dim) + (THERMAL_IMPORTS if thermal else "")
-              + ("\nfrom solver.fused import _reduce_with" if contact and not thermal else ""))
+              + ("\nfrom solver.fused import _reduce_with" if contact else ""))
     return "\n".join([header, *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
 
 
