@@ -22,6 +22,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numba
 import numpy as np
@@ -117,7 +118,9 @@ def main() -> int:
             twin.advance(dt)
         t += dt
     with tempfile.TemporaryDirectory() as folder:
-        kernels = {"base": base_kernels.load(args.base, "johnson_cook", Path(folder)), "this": johnson_cook}
+        # "this" holds the function itself: johnson_cook._update is what gets patched per variant
+        kernels = {"base": base_kernels.load(args.base, "johnson_cook", Path(folder)),
+                   "this": SimpleNamespace(_update=johnson_cook._update)}
         kernel = compare_kernels(kernels, sim, dt, args.rounds)
         print(f"state at {1e6 * t:.2f} us, {sim.particles.count} particles, {kernel['yielding']} yielding")
         print(f"kernel: {ratio_line(kernel['times'])}")

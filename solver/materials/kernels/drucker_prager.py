@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 from numba import njit, prange
 
 from solver.materials.drucker_prager import APEX, ELASTIC, SURFACE, TENSION
@@ -42,24 +41,20 @@ def _update(L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c,
 
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, eta, eta_bar, xi_c, cutoff):
-    # scratch per block, in this serial function: never shared between threads
-    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
-        # the Jaumann trial stress, written out (kernels/objective.py says why)
-        objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt)
-        m_trial = -(objective.split(stress[p], s) - K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt)
-        j_trial = objective.von_mises(s) / math.sqrt(3.0)     # sqrt(J2)
+        # the Jaumann trial stress in nine scalars (kernels/objective.py says why)
+        D, w21, w02, w10 = objective.rate_parts(L[p])
+        sigma = objective.rotated(stress[p], w21, w02, w10, dt)
+        m_trial = -(objective.mean_pressure(sigma) - K * objective.trace(D) * dt)
+        s = objective.trial_deviator(sigma, D, 2.0 * G * dt)
+        j_trial = objective.von_mises_of(s) / math.sqrt(3.0)     # sqrt(J2)
         m, j, state[p] = return_map(m_trial, j_trial, K, G, eta, eta_bar, xi_c, cutoff)
         if state[p] != ELASTIC:
             eps_p[p] += (j_trial - j) / (math.sqrt(3.0) * G)
             # sigma_{n+1} : C^-1 : (sigma_trial - sigma_{n+1}), the deviator radial (s:s = 2 J2)
             work[p] += volume[p] * (j * (j_trial - j) / G + m * (m_trial - m) / K)
-            scale = j / j_trial if j_trial > 0.0 else 0.0
-            for a in range(3):
-                for b in range(3):
-                    s[a, b] *= scale
-        objective.assemble(s, -m, stress[p])
+            s = objective.scaled(s, j / j_trial if j_trial > 0.0 else 0.0)
+        objective.assemble_from(s, -m, stress[p])
 
 
 @njit(cache=True)

@@ -16,7 +16,6 @@ q of the returned stress; solver/materials/plastic_work.py). The stored (elastic
 from __future__ import annotations
 
 import numba
-import numpy as np
 from numba import njit, prange
 
 from solver.materials.kernels import objective
@@ -33,26 +32,21 @@ def _update(L, stress, eps_p, volume, work, dt, K, G, yield_stress, H, threads):
 
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, eps_p, volume, work, dt, K, G, yield_stress, H):
-    # scratch per block, in this serial function: never shared between threads (nor in one cache line)
-    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for p in range(lo, hi):
-        # the Jaumann trial stress, written out (kernels/objective.py says why)
-        objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt)
-        pressure = objective.split(stress[p], s)
-        pressure -= K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt
-        q = objective.von_mises(s)
+        # the Jaumann trial stress in nine scalars (kernels/objective.py says why)
+        D, w21, w02, w10 = objective.rate_parts(L[p])
+        sigma = objective.rotated(stress[p], w21, w02, w10, dt)
+        pressure = objective.mean_pressure(sigma) - K * objective.trace(D) * dt
+        s = objective.trial_deviator(sigma, D, 2.0 * G * dt)
+        q = objective.von_mises_of(s)
         sigma_y = yield_stress + H * eps_p[p]
         if q > sigma_y:
             d_eps = (q - sigma_y) / (3.0 * G + H)
             eps_p[p] += d_eps
             flow = sigma_y + H * d_eps                  # q of the returned stress
-            scale = flow / q
             work[p] += volume[p] * flow * d_eps         # sigma_{n+1} : d eps_p (plastic_work.py)
-            for a in range(3):
-                for b in range(3):
-                    s[a, b] *= scale
-        objective.assemble(s, pressure, stress[p])
+            s = objective.scaled(s, flow / q)
+        objective.assemble_from(s, pressure, stress[p])
 
 
 class J2Plasticity(LinearElastic):

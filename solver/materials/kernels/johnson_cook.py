@@ -133,30 +133,27 @@ def _update(L, stress, mass, volume, eps_p, eps_rate, T, work, dmg, d_init, dt, 
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, work, dmg, d_init, dt, G, prm, eos_prm, dmg_prm,
                   fail_prm):
-    # scratch per block, in this serial function: never shared between threads (nor in one cache line)
-    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    # the stress in nine scalars from the rotation to the store (kernels/objective.py says why)
     damaged = dmg.shape[0] > 0
     accumulates = d_init.shape[0] > 0
     fastest = 0.0
     for p in range(lo, hi):
-        objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt)
-        objective.split(stress[p], s)
+        D, w21, w02, w10 = objective.rate_parts(L[p])
         d = dmg[p] if damaged else 0.0
         g = (1.0 - d) * G
 
         # deviator: elastic trial and radial return on the flow stress
-        objective.add_deviatoric_rate(s, D, 2.0 * g * dt)
-        q = objective.von_mises(s)
+        s = objective.trial_deviator(objective.rotated(stress[p], w21, w02, w10, dt), D, 2.0 * g * dt)
+        q = objective.von_mises_of(s)
         t_star = homologous_temperature(prm, T[p])
         sigma_f = flow_stress(prm, eps_p[p], 1.0, t_star) * (1.0 - d)   # static: rate factor 1
         d_eps = 0.0
         if d >= 1.0:
-            s[:, :] = 0.0
+            s = objective.NO_STRESS
         elif q > sigma_f:
             d_eps = plastic_increment(q, 3.0 * g, sigma_f, prm[C], prm[RATE0] * dt, eps_rate[p] * dt)
             sigma_f = q - 3.0 * g * d_eps
-            s *= sigma_f / q
+            s = objective.scaled(s, sigma_f / q)
             work[p] += volume[p] * sigma_f * d_eps     # sigma_{n+1} : d eps_p, as the heat below
         eps_p[p] += d_eps
         eps_rate[p] = d_eps / dt
@@ -173,13 +170,13 @@ def _update_block(lo, hi, L, stress, mass, volume, eps_p, eps_rate, T, work, dmg
         if damaged:
             if damage_model.fails(fail_prm, eps_p[p], pressure):
                 dmg[p] = 1.0
-                s[:, :] = 0.0
+                s = objective.NO_STRESS
                 pressure = max(pressure, 0.0)
             elif accumulates:
                 d_init[p], d_new = damage_model.accumulate(
-                    dmg_prm, d_init[p], d_eps, pressure, objective.von_mises(s), eps_rate[p] / prm[RATE0], t_star)
+                    dmg_prm, d_init[p], d_eps, pressure, objective.von_mises_of(s), eps_rate[p] / prm[RATE0], t_star)
                 dmg[p] = max(dmg[p], d_new)
-        objective.assemble(s, pressure, stress[p])
+        objective.assemble_from(s, pressure, stress[p])
 
         fastest = max(fastest, (eos.bulk_tangent(eos_prm, mu) + 4.0 / 3.0 * g) / rho)
     return fastest   # squared: one square root for all particles

@@ -177,10 +177,10 @@ def _cut_off(trial, sin_phi, two_c_cos, cutoff, sig):
 
 
 @njit(cache=True)
-def may_yield(s, m, sin_phi, two_c_cos):
-    """False when no Lode angle puts the stress (deviator s, mean m) outside the surface:
+def may_yield(q, m, sin_phi, two_c_cos):
+    """False when no Lode angle puts the stress (von Mises q, mean m) outside the surface:
     s1 - s3 <= 2 sqrt(J2) and s1 + s3 <= 2 m + sqrt(J2 / 3)."""
-    j = objective.von_mises(s) / math.sqrt(3.0)
+    j = q / math.sqrt(3.0)
     return 2.0 * j + (2.0 * m + j / math.sqrt(3.0)) * sin_phi - two_c_cos > 0.0
 
 
@@ -195,20 +195,20 @@ def _update(L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, c
 @njit(cache=True)
 def _update_block(lo, hi, L, stress, eps_p, state, volume, work, dt, K, G, sin_phi, sin_psi, cohesion, cutoff):
     # scratch per block, in this serial function: never shared between threads
-    D, W, s = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     A, V = np.empty((3, 3)), np.empty((3, 3))
     values, trial, sig = np.empty(3), np.empty(3), np.empty(3)
     planes, scratch, order = np.empty((2, 2), np.int64), np.empty((7, 3)), np.empty(3, np.int64)
     lam = K - 2.0 * G / 3.0
     two_c_cos = 2.0 * cohesion * math.sqrt(1.0 - sin_phi * sin_phi)
     for p in range(lo, hi):
-        # the Jaumann trial stress, written out (kernels/objective.py says why)
-        objective.rate_tensors(L[p], D, W)
-        objective.rotate(stress[p], W, dt)
-        m = -(objective.split(stress[p], s) - K * objective.add_deviatoric_rate(s, D, 2.0 * G * dt) * dt)
-        objective.assemble(s, -m, stress[p])
+        # the Jaumann trial stress in nine scalars (kernels/objective.py says why)
+        D, w21, w02, w10 = objective.rate_parts(L[p])
+        sigma = objective.rotated(stress[p], w21, w02, w10, dt)
+        m = -(objective.mean_pressure(sigma) - K * objective.trace(D) * dt)
+        s = objective.trial_deviator(sigma, D, 2.0 * G * dt)
+        objective.assemble_from(s, -m, stress[p])
         state[p] = ELASTIC
-        if not (may_yield(s, m, sin_phi, two_c_cos) or m > cutoff):
+        if not (may_yield(objective.von_mises_of(s), m, sin_phi, two_c_cos) or m > cutoff):
             continue
         for a in range(3):
             for b in range(3):
