@@ -6,12 +6,15 @@ the J2 stress-strain curves in uniaxial strain and uniaxial stress, the
 Johnson-Cook flow stress, the EOS pressure, the adiabatic temperature of a
 perfectly plastic, thermally softening material, and a rigid rotation.
 """
+import functools
 import math
 
 import numpy as np
 import pytest
 
 from material_point import MaterialPoint
+
+from solver.materials.kernels import eos as eos_kernels
 
 E, NU, RHO = 200e9, 0.3, 7800.0
 G = E / (2 * (1 + NU))
@@ -252,6 +255,47 @@ def test_mie_gruneisen_pressure(direction):
         assert p == pytest.approx(mie_gruneisen(mu, e), rel=1e-12)
         assert q < 1e-9 * abs(p)
     assert (path[-1, 0] > 0.12) if direction < 0 else (path[-1, 0] < -0.11)
+
+
+@functools.cache
+def gauss_legendre(points):
+    return np.polynomial.legendre.leggauss(points)
+
+
+def hugoniot_work_reference(s, gamma0, mu, points=2000):
+    """int_0^mu p_c / (1 + m)^2 dm / (rho0 c0^2) by 2000-point Gauss-Legendre (exact to round-off
+    for a smooth integrand; near the limiting compression the integrand's peak limits it to about
+    1e-11 at 0.99 of the limit)."""
+    x, w = gauss_legendre(points)
+    m = 0.5 * mu * (1.0 + x)
+    return 0.5 * mu * np.sum(w * m * (1.0 + (1.0 - 0.5 * gamma0) * m) / ((1.0 - (s - 1.0) * m) ** 2 * (1.0 + m) ** 2))
+
+
+class CopperConfig:
+    """What eos.parameters reads of a johnson_cook material with a Mie-Gruneisen EOS."""
+
+    def __init__(self, s, gamma0):
+        self.youngs_modulus, self.poisson_ratio, self.density = CU["youngs_modulus"], CU["poisson_ratio"], 8940.0
+        self.eos = type("EOS", (), {"model": "mie_gruneisen", "c0": 3933.0, "s": s, "gamma0": gamma0})
+
+
+@pytest.mark.parametrize("s", [0.05, 0.6, 1.0, 1.489, 2.5])
+@pytest.mark.parametrize("gamma0", [0.0, 2.02, 3.0])
+def test_mie_gruneisen_cold_energy_closed_form(s, gamma0):
+    """The compression branch's stored energy (eos._hugoniot_work, partial fractions) against the
+    integral of its pressure, from mu = 1e-9 (where its order-mu terms cancel: its series branch)
+    through the switch to log1p at r = 1e-3 up to 0.99 of the limiting compression 1 / (s - 1)."""
+    limit = 1.0 / (s - 1.0) if s > 1.0 else 4.0
+    prm = eos_kernels.parameters(CopperConfig(s, gamma0))
+    for mu in [*np.logspace(-9, -1, 25), *np.linspace(0.1, 0.99 * limit, 25)]:
+        exact = hugoniot_work_reference(s, gamma0, mu)
+        if mu < 1e-6:      # the reference's products round off here: its series, to mu^4
+            a, b = 1.0 - 0.5 * gamma0, s - 1.0
+            exact = mu**2 / 2 + (a + 2 * b - 2) * mu**3 / 3 + (a * (2 * b - 2) + 3 * b * b - 4 * b + 3) * mu**4 / 4
+        stored = eos_kernels.stored_energy(prm, mu) / prm[eos_kernels.RHO0_C0_SQ]
+        assert stored == pytest.approx(exact, rel=2e-11), mu
+    if s > 1.0:   # beyond the limiting compression: NaN, as the pressure (the run reports it)
+        assert math.isnan(eos_kernels.stored_energy(prm, 1.01 * limit))
 
 
 @pytest.mark.parametrize("eos", [MG, {"model": "linear"}], ids=["mie_gruneisen", "linear"])
