@@ -55,8 +55,9 @@ class Particles:
         return out
 
     def take(self, order: np.ndarray) -> None:
-        """Keep the particles `order` (indices), in that order, in every array."""
-        self.replace({name: a[order] for name, a in self.arrays().items()})
+        """Keep the particles `order` (indices), in that order, in every array (np.take: numpy's
+        fancy indexing copies (n, 3, 3) rows 4-5x slower)."""
+        self.replace({name: np.take(a, order, axis=0) for name, a in self.arrays().items()})
 
     def replace(self, arrays: dict[str, np.ndarray]) -> None:
         """Set the per-particle arrays named as arrays() names them (all the same length)."""

@@ -149,19 +149,12 @@ class SlabDomain:
             return moved
         _, counts, order, start = bin_particles(dest, self.processes, 1)
         arrays = particles.arrays()
-        outgoing = [{name: a[order[start[r]:start[r + 1]]] for name, a in arrays.items()}
+        # (np.take, not a[index]: numpy's fancy indexing copies (n, 3, 3) rows 4-5x slower)
+        outgoing = [{name: np.take(a, order[start[r]:start[r + 1]], axis=0) for name, a in arrays.items()}
                     if r != self.rank and counts[r] else None for r in range(self.processes)]
         incoming = [part for part in self.comm.alltoall(outgoing) if part]
         stay = order[start[self.rank]:start[self.rank + 1]]
-        merged = {name: np.concatenate([a[stay]] + [_column(part, name, a) for part in incoming])
-                  for name, a in arrays.items()}
-        for part in incoming:   # state a model allocated on the sending side only
-            for name in part.keys() - merged.keys():
-                merged[name] = np.concatenate([np.zeros((stay.size, *part[name].shape[1:]))]
-                                              + [_column(p, name, part[name]) for p in incoming])
-        # particles sorted by material (the models' slices), then by id, as one process has them
-        order = np.lexsort((merged["id"], self._material[merged["body"]]))
-        particles.replace({name: a[order] for name, a in merged.items()})
+        particles.replace(_merged(arrays, stay, incoming, self._material))
         return max(moved, PARTICLES_MOVED)
 
     def _positions(self, particles) -> np.ndarray:
@@ -294,6 +287,25 @@ class SlabDomain:
 def _strides(counts: np.ndarray) -> np.ndarray:
     """Node number strides of a grid with `counts` nodes per axis (x fastest, as Grid numbers them)."""
     return np.concatenate(([1], np.cumprod(counts)[:-1])).astype(np.int64)
+
+
+def _merged(arrays: dict, stay: np.ndarray, incoming: list[dict], material: np.ndarray) -> dict:
+    """The particles `stay` (rows of `arrays`) and the `incoming` blocks, sorted by material (the
+    models' slices), then by id, as one process has them: each array copied once into the new
+    order (np.take from itself, or from itself and the blocks behind it)."""
+    n = next(iter(arrays.values())).shape[0]
+    ids = np.concatenate([arrays["id"][stay]] + [part["id"] for part in incoming])
+    bodies = np.concatenate([arrays["body"][stay]] + [part["body"] for part in incoming])
+    arrived = n + np.arange(ids.size - stay.size)                  # rows behind the n of `arrays`
+    source = np.concatenate([stay, arrived])[np.lexsort((ids, material[bodies]))]
+    names = set(arrays).union(*(part.keys() for part in incoming))
+    merged = {}
+    for name in names:   # (a state a model allocated on the sending side only: zeros here)
+        like = arrays[name] if name in arrays else next(part[name] for part in incoming if name in part)
+        mine = arrays[name] if name in arrays else np.zeros((n, *like.shape[1:]), dtype=like.dtype)
+        block = np.concatenate([mine] + [_column(part, name, like) for part in incoming]) if incoming else mine
+        merged[name] = np.take(block, source, axis=0)
+    return merged
 
 
 def _column(part: dict, name: str, like: np.ndarray) -> np.ndarray:
