@@ -298,7 +298,7 @@ def _merged(arrays: dict, stay: np.ndarray, incoming: list[dict], material: np.n
     bodies = np.concatenate([arrays["body"][stay]] + [part["body"] for part in incoming])
     arrived = n + np.arange(ids.size - stay.size)                  # rows behind the n of `arrays`
     source = np.concatenate([stay, arrived])[np.lexsort((ids, material[bodies]))]
-    names = set(arrays).union(*(part.keys() for part in incoming))
+    names = list(arrays) + list(dict.fromkeys(name for part in incoming for name in part if name not in arrays))
     merged = {}
     for name in names:   # (a state a model allocated on the sending side only: zeros here)
         like = arrays[name] if name in arrays else next(part[name] for part in incoming if name in part)
