@@ -258,13 +258,18 @@ class Conduction:
         rate = thermal_kernels.boundary_heat(self.faces.node, self.faces.value, faces.flux, faces.coefficient,
                                              faces.ambient, self.faces.axis, self.n_nodes, self.heat, self.cutoff)
         self.boundary_heat += dt * rate
-        if self.threads > 1:
-            thermal_kernels.integrate(dt, self.heat, self.cutoff, self.T_old, self.T_new, self.T_change, self.threads)
-        else:
-            thermal_kernels.integrate_block(0, self.heat.shape[0], dt, self.heat, self.cutoff, self.T_old, self.T_new,
-                                            self.T_change)
+        self._over_nodes(thermal_kernels.integrate, thermal_kernels.integrate_block,
+                         dt, self.heat, self.cutoff, self.T_old, self.T_new, self.T_change)
         if not self.exchanges:   # (else once the step's frictional heat is known: after_g2p)
             self._hold_and_share(sim)
+
+    def _over_nodes(self, threaded, block, *args) -> None:
+        """A node pass of solver/thermal_kernels.py over every node: `threaded` in one block a thread,
+        or with one thread `block` itself (a one-thread parallel region costs about 1 us a call)."""
+        if self.threads > 1:
+            threaded(*args, self.threads)
+        else:
+            block(0, self.heat.shape[0], *args)
 
     def _hold_and_share(self, sim) -> None:
         thermal_kernels.hold(self.held.node, self.T_now, self.n_nodes, self.T_old)
@@ -302,11 +307,8 @@ class Conduction:
             thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
                                       x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
-        if self.threads > 1:
-            thermal_kernels.remapped_temperature(self.heat, self.remapped, self.cutoff, self.T_new, self.threads)
-        else:
-            thermal_kernels.remapped_temperature_block(0, self.heat.shape[0], self.heat, self.remapped, self.cutoff,
-                                                       self.T_new)
+        self._over_nodes(thermal_kernels.remapped_temperature, thermal_kernels.remapped_temperature_block,
+                         self.heat, self.remapped, self.cutoff, self.T_new)
         if self.contact is not None:   # the flux at a contact node: from the touching fields' one temperature
             thermal_kernels.share_temperature(self.heat, self.touching, self.n_nodes, self.cutoff, self.T_new)
         thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)

@@ -291,8 +291,8 @@ def _strides(counts: np.ndarray) -> np.ndarray:
 
 def _merged(arrays: dict, stay: np.ndarray, incoming: list[dict], material: np.ndarray) -> dict:
     """The particles `stay` (rows of `arrays`) and the `incoming` blocks, sorted by material (the
-    models' slices), then by id, as one process has them: each array copied once into the new
-    order (np.take from itself, or from itself and the blocks behind it)."""
+    models' slices), then by id, as one process has them: each array taken into the new order by
+    one np.take (from itself; with arrivals, from itself and the received blocks concatenated)."""
     n = next(iter(arrays.values())).shape[0]
     ids = np.concatenate([arrays["id"][stay]] + [part["id"] for part in incoming])
     bodies = np.concatenate([arrays["body"][stay]] + [part["body"] for part in incoming])

@@ -271,14 +271,6 @@ def hugoniot_work_reference(s, gamma0, mu, points=2000):
     return 0.5 * mu * np.sum(w * m * (1.0 + (1.0 - 0.5 * gamma0) * m) / ((1.0 - (s - 1.0) * m) ** 2 * (1.0 + m) ** 2))
 
 
-class CopperConfig:
-    """What eos.parameters reads of a johnson_cook material with a Mie-Gruneisen EOS."""
-
-    def __init__(self, s, gamma0):
-        self.youngs_modulus, self.poisson_ratio, self.density = CU["youngs_modulus"], CU["poisson_ratio"], 8940.0
-        self.eos = type("EOS", (), {"model": "mie_gruneisen", "c0": 3933.0, "s": s, "gamma0": gamma0})
-
-
 @pytest.mark.parametrize("s", [0.05, 0.6, 1.0, 1.489, 2.5])
 @pytest.mark.parametrize("gamma0", [0.0, 2.02, 3.0])
 def test_mie_gruneisen_cold_energy_closed_form(s, gamma0):
@@ -286,7 +278,7 @@ def test_mie_gruneisen_cold_energy_closed_form(s, gamma0):
     integral of its pressure, from mu = 1e-9 (where its order-mu terms cancel: its series branch)
     through the switch to log1p at r = 1e-3 up to 0.99 of the limiting compression 1 / (s - 1)."""
     limit = 1.0 / (s - 1.0) if s > 1.0 else 4.0
-    prm = eos_kernels.parameters(CopperConfig(s, gamma0))
+    prm = MaterialPoint({**CU, "eos": {**MG, "s": s, "gamma0": gamma0}}).model.eos
     for mu in [*np.logspace(-9, -1, 25), *np.linspace(0.1, 0.99 * limit, 25)]:
         exact = hugoniot_work_reference(s, gamma0, mu)
         if mu < 1e-6:      # the reference's products round off here: its series, to mu^4
