@@ -70,15 +70,20 @@ def steps_for(example: str) -> int:
 def write_blocks(folder: Path) -> list[str]:
     """The scenes of benchmarks/throughput.py as JSON files (measured by path in every tree):
     its part-2 block (linear elastic, linear hats, MUSL, FLIP) and its side-by-side block
-    (neo-Hookean, quadratic B-splines, USL, APIC), 2D 225^2 cells and 3D 32^3 cells."""
+    (neo-Hookean, quadratic B-splines, USL, APIC and MLS), 2D 225^2 cells and 3D 32^3 cells,
+    and the mpm88 fluid (MLS)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from throughput import block_scene, mls_block_scene
-    paths = []
+    from throughput import block_scene, mls_block_scene, mpm88_scene
+    scenes = {"mpm88": mpm88_scene(1)}
     for dim, cells in ((2, 225), (3, 32)):
-        for name, scene in (("flip", block_scene(dim, cells)), ("apic", mls_block_scene(dim, cells, 1))):
-            path = folder / f"block_{name}_{dim}d.json"
-            path.write_text(json.dumps(scene))
-            paths.append(str(path))
+        scenes[f"block_flip_{dim}d"] = block_scene(dim, cells)
+        scenes[f"block_apic_{dim}d"] = mls_block_scene(dim, cells, 1)
+        scenes[f"block_mls_{dim}d"] = mls_block_scene(dim, cells, 1, "mls")
+    paths = []
+    for name, scene in scenes.items():
+        path = folder / f"{name}.json"
+        path.write_text(json.dumps(scene))
+        paths.append(str(path))
     return paths
 
 
