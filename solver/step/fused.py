@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import fused, shape
+from solver import fused, kernels, shape
 from solver.threads import first_of
 from solver.step.phases import Phases
 
@@ -89,6 +89,13 @@ class FusedPhases(Phases):
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _integrate(self, dt: float) -> None:
+        if self.folds_force():   # dt f_I is in (mv)_I already: v~_I^{t+dt} = (mv)_I / m_I = v_I^t
+            g = self.sim.grid
+            kernels.folded_velocities(g.mass, g.momentum, g.v_old, g.v_new)
+        else:
+            super()._integrate(dt)
 
     def grid_to_particles(self, dt: float, remap: bool, kinematics: bool = False) -> None:
         if remap:

@@ -78,10 +78,15 @@ class Phases:
         g = sim.grid
         for hook in sim.hooks.before_update:
             hook(sim, dt)
-        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
+        self._integrate(dt)
         self._constrain(g.v_old)
         sim.boundary_work += self._constrain(g.v_new, record=True)
         sim.domain.share_nodes(g.v_old, g.v_new)   # (owners' values to ghost nodes)
+
+    def _integrate(self, dt: float) -> None:
+        """v_I^t and v~_I^{t+dt}, unconstrained, from the nodal sums."""
+        sim, g = self.sim, self.sim.grid
+        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
 
     def current_velocities(self) -> None:
         """v_I^t = (mv)_I / m_I, constrained: USF's velocity for the stress update."""
