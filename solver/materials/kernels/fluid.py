@@ -24,10 +24,11 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
-def _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, dim):
-    """Stress of particle p; returns its squared sound speed."""
+def _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, dim, linear):
+    """Stress of particle p; returns its squared sound speed. `linear` (a constant at each
+    call): gamma is 1, and (rho / rho0)^1 is rho / rho0 exactly, without pow()."""
     ratio = volume0[p] / volume[p]                  # rho / rho0 = 1 / J
-    stiff = ratio**gamma
+    stiff = ratio if linear else ratio**gamma
     pressure = max(K * (stiff - 1.0), min_pressure)
     tr = 0.0
     for a in range(dim):
@@ -45,19 +46,29 @@ def _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure,
 
 @njit(parallel=True, cache=True)
 def _update(L, volume, volume0, stress, rho0, K, gamma, mu, min_pressure):
-    """Stress of every particle; returns the largest sound speed. One loop per dimension,
-    `dim` a compile-time constant in each (as solver/materials/kernels/linear_elastic.py)."""
+    """Stress of every particle; returns the largest sound speed. One loop per dimension and
+    per gamma = 1 or not, `dim` and `linear` compile-time constants in each (as
+    solver/materials/kernels/linear_elastic.py): pow() was 21 of the 27 ns a particle of
+    mpm88's stress update (gamma = 1), and a runtime test of gamma inside the loop did not
+    remove it (LLVM may evaluate pow before the select)."""
     n, dim = L.shape[0], L.shape[1]
     c2_max = 0.0   # (a max reduction over threads)
-    if dim == 2:
+    if dim == 2 and gamma == 1.0:
         for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 2))
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 2, True))
+    elif dim == 2:
+        for p in prange(n):
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 2, False))
+    elif dim == 3 and gamma == 1.0:
+        for p in prange(n):
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 3, True))
     elif dim == 3:
         for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 3))
-    else:
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 3, False))
+    else:   # 1D: gamma tested at run time (the same bits, maybe not the speed)
         for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 1))
+            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 1,
+                                             gamma == 1.0))
     return math.sqrt(c2_max)
 
 
