@@ -187,21 +187,6 @@ def integrate_nodes(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_n
             v_new[node, a] = v + dt * grid_force[node, a] / m if m > mass_cutoff else v
 
 
-@njit(parallel=True, cache=True)
-def folded_velocities(grid_mass, grid_mom, v_old, v_new):
-    """`integrate_nodes` after a P2G that folded dt f_I into (mv)_I (solver/step/fused.py,
-    `folds_force`): v_I^t = v~_I^{t+dt} = (mv)_I / m_I. The same bits as integrate_nodes with
-    f_I = 0 (v + dt 0 / m is v: (mv)_I is never -0, being summed from +0), one division a
-    component instead of two."""
-    n_nodes, dim = v_old.shape
-    for node in prange(n_nodes):
-        m = grid_mass[node]
-        for a in range(dim):
-            v = grid_mom[node, a] / m if m > 0.0 else 0.0
-            v_old[node, a] = v
-            v_new[node, a] = v
-
-
 @njit(cache=True)
 def apply_dirichlet(bc_node, bc_axis, bc_value, grid_mass, v):
     """Impose prescribed velocity components; returns the work the constraint does,

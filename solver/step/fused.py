@@ -91,9 +91,13 @@ class FusedPhases(Phases):
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
     def _integrate(self, dt: float) -> None:
-        if self.folds_force():   # dt f_I is in (mv)_I already: v~_I^{t+dt} = (mv)_I / m_I = v_I^t
+        """After a folded P2G, v~_I^{t+dt} = (mv)_I / m_I = v_I^t, dt f_I being in (mv)_I already: the
+        same bits as integrate_nodes with f_I = 0 ((mv)_I, summed from +0, is never -0), without
+        its second division (2D block, 226^2 nodes: 307 -> 179 us at one thread, 305 -> 131 at two)."""
+        if self.folds_force():
             g = self.sim.grid
-            kernels.folded_velocities(g.mass, g.momentum, g.v_old, g.v_new)
+            kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
+            np.copyto(g.v_new, g.v_old)
         else:
             super()._integrate(dt)
 
