@@ -67,11 +67,11 @@ def steps_for(example: str) -> int:
         else 50
 
 
-def write_blocks(folder: Path) -> list[str]:
+def write_blocks(folder: Path, names: list[str]) -> list[str]:
     """The scenes of benchmarks/throughput.py as JSON files (measured by path in every tree):
     its part-2 block (linear elastic, linear hats, MUSL, FLIP) and its side-by-side block
     (neo-Hookean, quadratic B-splines, USL, APIC and MLS), 2D 225^2 cells and 3D 32^3 cells,
-    and the mpm88 fluid (MLS)."""
+    and the mpm88 fluid (MLS); `names` picks some (none: all of them)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from throughput import block_scene, mls_block_scene, mpm88_scene
     scenes = {"mpm88": mpm88_scene(1)}
@@ -79,8 +79,13 @@ def write_blocks(folder: Path) -> list[str]:
         scenes[f"block_flip_{dim}d"] = block_scene(dim, cells)
         scenes[f"block_apic_{dim}d"] = mls_block_scene(dim, cells, 1)
         scenes[f"block_mls_{dim}d"] = mls_block_scene(dim, cells, 1, "mls")
+    unknown = sorted(set(names) - set(scenes))
+    if unknown:
+        raise SystemExit(f"--blocks: no scene {', '.join(unknown)} (there are {', '.join(scenes)})")
     paths = []
     for name, scene in scenes.items():
+        if names and name not in names:
+            continue
         path = folder / f"{name}.json"
         path.write_text(json.dumps(scene))
         paths.append(str(path))
@@ -110,11 +115,13 @@ def main() -> int:
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", type=Path, help="also write the rows as JSON")
-    parser.add_argument("--blocks", action="store_true", help="also the block scenes of benchmarks/throughput.py")
+    parser.add_argument("--blocks", nargs="*", metavar="NAME",
+                        help="also the block scenes of benchmarks/throughput.py (names: those only, e.g. "
+                             "block_flip_2d block_apic_3d; a base before MLS has no mpm88 nor block_mls_*)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch:
         trees = {"this": ROOT}
-        blocks = write_blocks(Path(scratch)) if args.blocks else []
+        blocks = write_blocks(Path(scratch), args.blocks) if args.blocks is not None else []
         if args.base:
             base = Path(scratch) / "base"
             subprocess.run(["git", "worktree", "add", "--detach", str(base), args.base], cwd=ROOT, check=True,
