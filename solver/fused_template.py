@@ -136,7 +136,8 @@ def _stencil(dim: int, body: list[str], gradients: bool, contact: bool) -> list[
         level += 1
     row = " + ".join(f"(i{AXES[a]} + {LOOPS[a]}) * strides[{a}]" for a in range(1, dim))
     lines += _indent([f"row = {row} - offset" + (" + shift" if contact else ""), *_products(dim, gradients),
-                      "for i in range(S):", "    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)"], level)
+                      "for i in range(S):",
+                      "    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)"], level)
     return lines + _indent(body, level + 1)
 
 
