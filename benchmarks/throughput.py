@@ -3,6 +3,7 @@
     python benchmarks/throughput.py                  # the tables of docs/benchmarks.md
     python benchmarks/throughput.py --quick          # smaller problems, fewer steps
     python benchmarks/throughput.py --frameworks-python /path/to/python   # where taichi and warp-lang are
+    python benchmarks/throughput.py --side-by-side-only --mls-only --frameworks taichi   # the goals' columns, no Warp
 
 Part 1, the side-by-side comparison of issue 9. One elastic block (80 % of the unit
 grid, 2 particles per cell per axis, moving and straining), the same step for all:
@@ -82,6 +83,8 @@ def mls_block_scene(dim: int, cells: int, threads: int, transfer: str = "apic") 
 
 
 GENERAL = True           # time the general kernels too (--no-general: not)
+MLS_ONLY = False         # time only the solver's MLS step and the references (--mls-only)
+FRAMEWORKS_RUN = ("taichi", "warp")   # which frameworks' processes run (--frameworks)
 MPM88_DT = 1e-4          # Taichi's mpm88 benchmark (n_grid 128, dt 1e-4)
 MPM88_BULK = 400.0       # its E: the pressure K (J - 1) of a fluid of density 1
 MPM88_GRAVITY = 9.8
@@ -139,10 +142,7 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
         block = Path(tmp) / "block.npz"
         np.savez(block, x=start_x, v=start_v, mass=p.mass, volume=p.volume, cells=cells, lam=model.lam,
                  mu=model.mu, dt=MLS_DT)
-        best["taichi"] = _framework("mls_taichi.py", [str(block), str(threads), str(steps)], python, threads)["rate"]
-        if (dim, cells) not in warp_rate:          # Warp's CPU device runs on one thread
-            warp_rate[(dim, cells)] = _framework("mls_warp.py", [str(block), str(steps)], python, 1)["rate"]
-        best["warp"] = warp_rate[(dim, cells)]
+        best |= _frameworks("mls", block, threads, steps, python, warp_rate, (dim, cells))
     return {"case": f"{dim}D block", "dimension": dim, "particles": n, "threads": threads, **best}
 
 
@@ -162,11 +162,22 @@ def side_by_side_mpm88(threads: int, steps: int, python: str, warp_rate: dict) -
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "mpm88.npz"
         np.savez(path, **block)
-        best["taichi"] = _framework("mpm88_taichi.py", [str(path), str(threads), str(steps)], python, threads)["rate"]
-        if "mpm88" not in warp_rate:
-            warp_rate["mpm88"] = _framework("mpm88_warp.py", [str(path), str(steps)], python, 1)["rate"]
-        best["warp"] = warp_rate["mpm88"]
+        best |= _frameworks("mpm88", path, threads, steps, python, warp_rate, "mpm88")
     return {"case": "mpm88", "dimension": 2, "particles": p.count, "threads": threads, **best}
+
+
+def _frameworks(stem: str, state: Path, threads: int, steps: int, python: str, warp_rate: dict, key) -> dict:
+    """Taichi's and Warp's rates on the state saved in `state` (nan for a framework left out
+    with --frameworks); Warp's CPU device runs on one thread, so it runs once per case."""
+    rates = {"taichi": float("nan"), "warp": float("nan")}
+    if "taichi" in FRAMEWORKS_RUN:
+        rates["taichi"] = _framework(f"{stem}_taichi.py", [str(state), str(threads), str(steps)], python,
+                                     threads)["rate"]
+    if "warp" in FRAMEWORKS_RUN:
+        if key not in warp_rate:
+            warp_rate[key] = _framework(f"{stem}_warp.py", [str(state), str(steps)], python, 1)["rate"]
+        rates["warp"] = warp_rate[key]
+    return rates
 
 
 def _unfolded(scene: dict) -> ExplicitMPM:
@@ -181,12 +192,15 @@ def _alternate(contenders: dict, threads: int, steps: int, dt: float, n: int) ->
     """Best of three rates of each stepper, taking turns (the general kernels run a quarter of the steps)."""
     import numba
 
-    if not GENERAL:
+    if not GENERAL or MLS_ONLY:
         contenders.pop("general")
+    if MLS_ONLY:
+        contenders.pop("solver")
+        contenders.pop("mls_unfolded")
     for stepper in contenders.values():     # compile, and set the thread count each uses
         numba.set_num_threads(threads)
         stepper.advance(dt)
-    best = {"general": float("nan")} | {name: 0.0 for name in contenders}
+    best = {name: float("nan") for name in ("solver", "mls_unfolded", "general")} | {name: 0.0 for name in contenders}
     for _ in range(3):
         for name, stepper in contenders.items():
             numba.set_num_threads(threads)
@@ -311,6 +325,10 @@ def main() -> int:
     parser.add_argument("--no-general", action="store_true", help="leave out the general kernels (part 1)")
     parser.add_argument("--mpm88-steps", type=int, default=20,
                         help="steps of each timing on the mpm88 fluid (0: leave it out)")
+    parser.add_argument("--mls-only", action="store_true",
+                        help="part 1: time only the solver's MLS step beside the references (the goals' columns)")
+    parser.add_argument("--frameworks", nargs="*", choices=("taichi", "warp"), default=["taichi", "warp"],
+                        help="which frameworks run in part 1 (default both; a framework left out reads nan)")
     parser.add_argument("--blocks", nargs="+", metavar="DIM:CELLS:STEPS",
                         help="the blocks of part 1 (default: 2:112:60 2:225:15 3:32:6 3:40:4)")
     args = parser.parse_args()
@@ -326,8 +344,10 @@ def main() -> int:
     if args.blocks:
         blocks = [tuple(int(v) for v in b.split(":")) for b in args.blocks]
     warp_rate: dict = {}
-    global GENERAL
+    global GENERAL, MLS_ONLY, FRAMEWORKS_RUN
     GENERAL = not args.no_general
+    MLS_ONLY = args.mls_only
+    FRAMEWORKS_RUN = tuple(args.frameworks)
     side = [side_by_side(dim, cells, threads, steps, args.frameworks_python, warp_rate)
             for dim, cells, steps in blocks for threads in args.threads]
     if args.mpm88_steps:
