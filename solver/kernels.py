@@ -75,17 +75,17 @@ def _p2g_block(dims, nodes, start, stop, idx, w, dw, mass, vel, volume, stress, 
     vs = np.empty((dim, dim))   # V_p sigma_p, hoisted out of the node loop
     mv = np.empty(dim)
     ma = np.empty(dim)
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         m = mass[p]
         vol = volume[p]
-        ap = 0 if shared_acc else p
+        ap = np.uint64(0) if shared_acc else p
         for a in range(dim):
             mv[a] = m * vel[p, a]
             ma[a] = m * acc[ap, a]
             for b in range(dim):
                 vs[a, b] = vol * stress[p, a, b]
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             wk = w[p, k]
             grid_mass[node] += wk * m
             for a in range(dim):
@@ -113,10 +113,10 @@ def p2g_mass_momentum(spec, idx, w, mass, vel, grid_mass, grid_mom, copies_mass,
 @njit(cache=True)
 def _mass_momentum_block(dims, nodes, start, stop, idx, w, mass, vel, grid_mass, grid_mom):
     dim, nk = len(dims), len(nodes)
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         m = mass[p]
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             mw = m * w[p, k]
             grid_mass[node] += mw
             for a in range(dim):
@@ -140,12 +140,12 @@ def p2g_force(spec, idx, w, dw, mass, volume, stress, acc, grid_force, copies_fo
 def _force_block(dims, nodes, start, stop, idx, w, dw, mass, volume, stress, acc, grid_force):
     dim, nk = len(dims), len(nodes)
     shared_acc = acc.shape[0] == 1
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         m = mass[p]
         vol = volume[p]
-        ap = 0 if shared_acc else p
+        ap = np.uint64(0) if shared_acc else p
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             mw = m * w[p, k]
             for a in range(dim):
                 f = mw * acc[ap, a]
@@ -223,12 +223,12 @@ def _g2p_block(dims, nodes, start, stop, idx, w, dt, flip_ratio, v_old, v_new, x
     dim, nk = len(dims), len(nodes)
     v_pic = np.zeros(dim)
     dv = np.zeros(dim)
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         for a in range(dim):
             v_pic[a] = 0.0
             dv[a] = 0.0
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             wk = w[p, k]
             for a in range(dim):
                 v_pic[a] += wk * v_new[node, a]
@@ -239,7 +239,7 @@ def _g2p_block(dims, nodes, start, stop, idx, w, dt, flip_ratio, v_old, v_new, x
         if double_map:
             m = mass[p]
             for k in range(nk):
-                node = idx[p, k]
+                node = np.uint64(idx[p, k])
                 mw = m * w[p, k]
                 for a in range(dim):
                     grid_mom_new[node, a] += mw * vel[p, a]
@@ -275,10 +275,10 @@ def _kinematics_block(dims, nodes, start, stop, idx, dw, v_grid, dt, L, F, volum
     # (the two updates are written out here: as inlined helper functions the
     # total-Lagrangian one ran 1.6x slower, measured on the E6 square)
     bad = -1
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         G[:, :] = 0.0
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             for a in range(dim):
                 va = v_grid[node, a]
                 for b in range(dim):
@@ -308,7 +308,7 @@ def _kinematics_block(dims, nodes, start, stop, idx, dw, v_grid, dt, L, F, volum
             J = determinant(F[p])
         volume[p] = J * volume0[p]
         if J <= 0.0 and bad < 0:
-            bad = p
+            bad = np.int64(p)
     return bad
 
 

@@ -54,7 +54,7 @@ def first_piola(F, stress, P, blocks):
 def _piola_block(start, stop, F, stress, P):
     dim = F.shape[1]
     Finv = np.empty((dim, dim))   # allocated per block (solver/kernels.py)
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         J = kernels.invert(F[p], Finv)
         for a in range(dim):
             for b in range(dim):

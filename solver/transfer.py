@@ -112,15 +112,15 @@ def mls_gradients(spec, idx, w, x, node_x, dw, blocks):
 def _mls_gradients_block(dims, nodes, start, stop, idx, w, x, node_x, dw):
     dim, nk = len(dims), len(nodes)
     D = np.empty(dim)
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         D[:] = 0.0
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             for b in range(dim):
                 d = node_x[node, b] - x[p, b]
                 D[b] += w[p, k] * d * d
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             for b in range(dim):
                 dw[p, k, b] = w[p, k] * (node_x[node, b] - x[p, b]) / D[b]
 
@@ -134,7 +134,7 @@ def affine_p2g(spec, idx, w, mass, x, C, node_x, grid_mom, copies_mom):
     bounds = block_bounds(w.shape[0], blocks)
     for t in prange(blocks):
         gp = own(t, grid_mom, copies_mom)
-        for p in range(bounds[t], bounds[t + 1]):
+        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
             affine_p2g_one(p, dims, nodes, idx, w, mass, x, C, node_x, gp)
     if blocks > 1:
         add_node_copies(grid_mom, copies_mom)
@@ -160,11 +160,11 @@ def _affine_g2p_block(dims, nodes, start, stop, idx, w, v_grid, x, mass, node_x,
     B = np.empty((dim, dim))
     D = np.empty(dim)
     d = np.empty(dim)
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):
         B[:, :] = 0.0
         D[:] = 0.0
         for k in range(nk):
-            node = idx[p, k]
+            node = np.uint64(idx[p, k])
             wk = w[p, k]
             for b in range(dim):
                 d[b] = node_x[node, b] - x[p, b]
@@ -184,7 +184,7 @@ def _affine_g2p_block(dims, nodes, start, stop, idx, w, v_grid, x, mass, node_x,
 def affine_p2g_one(p, dims, nodes, idx, w, mass, x, C, node_x, grid_mom):
     dim, nk = len(dims), len(nodes)
     for k in range(nk):
-        node = idx[p, k]
+        node = np.uint64(idx[p, k])
         mw = mass[p] * w[p, k]
         for a in range(dim):
             s = 0.0

@@ -32,11 +32,11 @@ def _block(dims, nodes, start, stop, x, lower, inv_h, cells, strides, idx, w, dw
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, 2))   # 1D weights of the two nodes, per axis
     g1 = np.empty((dim, 2))   # their derivatives
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
             if not (s >= 0.0 and s <= cells[a]):   # also catches NaN
-                return p
+                return np.int64(p)
             i = min(int(s), cells[a] - 1)
             f = s - i
             base[a] = i

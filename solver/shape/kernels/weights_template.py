@@ -39,11 +39,11 @@ def _block(nodes, dims, start, stop, x, data, lower, inv_h, cells, strides, idx,
     base = np.empty(dim, dtype=np.int64)
     w1 = np.empty((dim, support))
     g1 = np.empty((dim, support))
-    for p in range(start, stop):
+    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         for a in range(dim):
             first = axis((x[p, a] - lower[a]) * inv_h[a], a, p, cells[a], inv_h[a], data, w1, g1)
             if first < 0:
-                return p
+                return np.int64(p)
             base[a] = first
         scatter(p, nodes, dims, base, w1, g1, strides, idx, w, dw)
     return -1
