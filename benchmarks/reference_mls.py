@@ -25,7 +25,7 @@ def _bspline(s):
 
 
 @njit(cache=True, inline="always")
-def _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p):
+def gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p):
     """2D G2P of particle p: v_p and C_p from the grid's velocities (in grid_mom), x_p moved;
     returns v_p and C_p (inlined: no call level in the particle loop)."""
     bx, fx, wx = _bspline(x[p, 0] * inv_dx)
@@ -51,59 +51,99 @@ def _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p):
     return vx, vy, c00, c01, c10, c11
 
 
-@njit(parallel=True, cache=True)
-def step_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, copies_mass, copies_mom):
+@njit(cache=True, inline="always")
+def own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom):
+    """Thread t's nodal arrays: the grid itself for t = 0 (zeroed before the threads' loop),
+    else its own copy, zeroed here."""
+    if t == 0:
+        return grid_mass, grid_mom
+    gm, gp = copies_mass[t - 1], copies_mom[t - 1]
+    gm[:] = 0.0
+    gp[:, :] = 0.0
+    return gm, gp
+
+
+@njit(cache=True, inline="always")
+def node_velocity_2d(node, grid_mass, grid_mom, copies_mass, copies_mom):
+    """The threads' copies added into the node, then its velocity (mv) / m in grid_mom."""
+    for t in range(copies_mass.shape[0]):
+        grid_mass[node] += copies_mass[t, node]
+        grid_mom[node, 0] += copies_mom[t, node, 0]
+        grid_mom[node, 1] += copies_mom[t, node, 1]
+    if grid_mass[node] > 0.0:
+        grid_mom[node, 0] /= grid_mass[node]
+        grid_mom[node, 1] /= grid_mass[node]
+
+
+@njit(cache=True, inline="always")
+def deform_2d(dt, F, p, c00, c01, c10, c11):
+    """F_p <- (I + dt C_p) F_p."""
+    f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
+    F[p, 0, 0] = f00 + dt * (c00 * f00 + c01 * f10)
+    F[p, 0, 1] = f01 + dt * (c00 * f01 + c01 * f11)
+    F[p, 1, 0] = f10 + dt * (c10 * f00 + c11 * f10)
+    F[p, 1, 1] = f11 + dt * (c10 * f01 + c11 * f11)
+
+
+@njit(cache=True, inline="always")
+def scatter_affine_2d(dx, nx, bx, fx, wx, by, fy, wy, m, mvx, mvy, a00, a01, a10, a11, gm, gp):
+    """A particle's mass and affine momentum w (m v + A (x_I - x_p)) into its 3 x 3 nodes."""
+    for j in range(3):
+        dy = (j - fy) * dx
+        row = (by + j) * nx
+        for i in range(3):
+            dxi = (i - fx) * dx
+            w = wx[i] * wy[j]
+            node = row + bx + i
+            gm[node] += w * m
+            gp[node, 0] += w * (mvx + a00 * dxi + a01 * dy)
+            gp[node, 1] += w * (mvy + a10 * dxi + a11 * dy)
+
+
+@njit(cache=True, inline="always")
+def scatter_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, gm, gp, p):
+    """2D P2G of particle p into gm, gp, its Kirchhoff stress formed from F_p and folded into
+    the affine momentum (inlined: no call level in the particle loop)."""
     dx = 1.0 / inv_dx
+    bx, fx, wx = _bspline(x[p, 0] * inv_dx)
+    by, fy, wy = _bspline(x[p, 1] * inv_dx)
+    f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
+    J = f00 * f11 - f01 * f10
+    ln_j = lam * math.log(J)
+    # Kirchhoff stress mu (F F^T - I) + lam ln J I (plane strain)
+    t00 = mu * (f00 * f00 + f01 * f01 - 1.0) + ln_j
+    t01 = mu * (f00 * f10 + f01 * f11)
+    t11 = mu * (f10 * f10 + f11 * f11 - 1.0) + ln_j
+    k = -dt * vol[p] * 4.0 * inv_dx * inv_dx
+    m = mass[p]
+    a00, a01 = k * t00 + m * C[p, 0, 0], k * t01 + m * C[p, 0, 1]
+    a10, a11 = k * t01 + m * C[p, 1, 0], k * t11 + m * C[p, 1, 1]
+    mvx, mvy = m * v[p, 0], m * v[p, 1]
+    scatter_affine_2d(dx, nx, bx, fx, wx, by, fy, wy, m, mvx, mvy, a00, a01, a10, a11, gm, gp)
+
+
+@njit(parallel=True, cache=True)
+def p2g_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, copies_mass, copies_mom):
+    """The 2D step's P2G: each thread its block of particles into its own nodal arrays."""
     n = x.shape[0]
     threads = copies_mass.shape[0] + 1
     grid_mass[:] = 0.0
     grid_mom[:, :] = 0.0
     for t in prange(threads):
-        gm, gp = grid_mass, grid_mom
-        if t > 0:
-            gm, gp = copies_mass[t - 1], copies_mom[t - 1]
-            gm[:] = 0.0
-            gp[:, :] = 0.0
+        gm, gp = own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom)
         for p in range((n * t) // threads, (n * (t + 1)) // threads):
-            bx, fx, wx = _bspline(x[p, 0] * inv_dx)
-            by, fy, wy = _bspline(x[p, 1] * inv_dx)
-            f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
-            J = f00 * f11 - f01 * f10
-            ln_j = lam * math.log(J)
-            # Kirchhoff stress mu (F F^T - I) + lam ln J I (plane strain)
-            t00 = mu * (f00 * f00 + f01 * f01 - 1.0) + ln_j
-            t01 = mu * (f00 * f10 + f01 * f11)
-            t11 = mu * (f10 * f10 + f11 * f11 - 1.0) + ln_j
-            k = -dt * vol[p] * 4.0 * inv_dx * inv_dx
-            m = mass[p]
-            a00, a01 = k * t00 + m * C[p, 0, 0], k * t01 + m * C[p, 0, 1]
-            a10, a11 = k * t01 + m * C[p, 1, 0], k * t11 + m * C[p, 1, 1]
-            mvx, mvy = m * v[p, 0], m * v[p, 1]
-            for j in range(3):
-                dy = (j - fy) * dx
-                row = (by + j) * nx
-                for i in range(3):
-                    dxi = (i - fx) * dx
-                    w = wx[i] * wy[j]
-                    node = row + bx + i
-                    gm[node] += w * m
-                    gp[node, 0] += w * (mvx + a00 * dxi + a01 * dy)
-                    gp[node, 1] += w * (mvy + a10 * dxi + a11 * dy)
+            scatter_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, gm, gp, p)
+
+
+@njit(parallel=True, cache=True)
+def step_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, copies_mass, copies_mom):
+    n = x.shape[0]
+    p2g_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, copies_mass, copies_mom)
     for node in prange(grid_mass.shape[0]):
-        for t in range(threads - 1):
-            grid_mass[node] += copies_mass[t, node]
-            grid_mom[node, 0] += copies_mom[t, node, 0]
-            grid_mom[node, 1] += copies_mom[t, node, 1]
-        if grid_mass[node] > 0.0:
-            grid_mom[node, 0] /= grid_mass[node]
-            grid_mom[node, 1] /= grid_mass[node]
+        node_velocity_2d(node, grid_mass, grid_mom, copies_mass, copies_mom)
     for p in prange(n):
-        vx, vy, c00, c01, c10, c11 = _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
-        f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
-        F[p, 0, 0] = f00 + dt * (c00 * f00 + c01 * f10)
-        F[p, 0, 1] = f01 + dt * (c00 * f01 + c01 * f11)
-        F[p, 1, 0] = f10 + dt * (c10 * f00 + c11 * f10)
-        F[p, 1, 1] = f11 + dt * (c10 * f01 + c11 * f11)
+        vx, vy, c00, c01, c10, c11 = gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
+        deform_2d(dt, F, p, c00, c01, c10, c11)
 
 
 @njit(parallel=True, cache=True)
@@ -116,11 +156,7 @@ def step_3d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom,
     grid_mom[:, :] = 0.0
     aff = np.empty((threads, 4, 3, 3))   # [t, 0]: each thread's 3x3 on cache lines of its own
     for t in prange(threads):
-        gm, gp = grid_mass, grid_mom
-        if t > 0:
-            gm, gp = copies_mass[t - 1], copies_mom[t - 1]
-            gm[:] = 0.0
-            gp[:, :] = 0.0
+        gm, gp = own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom)
         a = aff[t, 0]
         for p in range((n * t) // threads, (n * (t + 1)) // threads):
             bx, fx, wx = _bspline(x[p, 0] * inv_dx)
@@ -241,11 +277,7 @@ def step_mpm88(dt, inv_dx, nx, gravity, bulk, bound, x, v, C, J, mass, vol, grid
     grid_mass[:] = 0.0
     grid_mom[:, :] = 0.0
     for t in prange(threads):
-        gm, gp = grid_mass, grid_mom
-        if t > 0:
-            gm, gp = copies_mass[t - 1], copies_mom[t - 1]
-            gm[:] = 0.0
-            gp[:, :] = 0.0
+        gm, gp = own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom)
         for p in range((n * t) // threads, (n * (t + 1)) // threads):
             bx, fx, wx = _bspline(x[p, 0] * inv_dx)
             by, fy, wy = _bspline(x[p, 1] * inv_dx)
@@ -254,32 +286,17 @@ def step_mpm88(dt, inv_dx, nx, gravity, bulk, bound, x, v, C, J, mass, vol, grid
             a00, a01 = stress + m * C[p, 0, 0], m * C[p, 0, 1]
             a10, a11 = m * C[p, 1, 0], stress + m * C[p, 1, 1]
             mvx, mvy = m * v[p, 0], m * v[p, 1]
-            for j in range(3):
-                dy = (j - fy) * dx
-                row = (by + j) * nx
-                for i in range(3):
-                    dxi = (i - fx) * dx
-                    w = wx[i] * wy[j]
-                    node = row + bx + i
-                    gm[node] += w * m
-                    gp[node, 0] += w * (mvx + a00 * dxi + a01 * dy)
-                    gp[node, 1] += w * (mvy + a10 * dxi + a11 * dy)
+            scatter_affine_2d(dx, nx, bx, fx, wx, by, fy, wy, m, mvx, mvy, a00, a01, a10, a11, gm, gp)
     last = nx - 1 - bound
     for node in prange(grid_mass.shape[0]):
-        for t in range(threads - 1):
-            grid_mass[node] += copies_mass[t, node]
-            grid_mom[node, 0] += copies_mom[t, node, 0]
-            grid_mom[node, 1] += copies_mom[t, node, 1]
-        if grid_mass[node] > 0.0:
-            grid_mom[node, 0] /= grid_mass[node]
-            grid_mom[node, 1] /= grid_mass[node]
+        node_velocity_2d(node, grid_mass, grid_mom, copies_mass, copies_mom)
         grid_mom[node, 1] -= dt * gravity
         ij = (node % nx, node // nx)
         for a in range(2):
             if (ij[a] < bound and grid_mom[node, a] < 0.0) or (ij[a] > last and grid_mom[node, a] > 0.0):
                 grid_mom[node, a] = 0.0
     for p in prange(n):
-        vx, vy, c00, c01, c10, c11 = _gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
+        vx, vy, c00, c01, c10, c11 = gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p)
         J[p] *= 1.0 + dt * (c00 + c11)
 
 
