@@ -69,6 +69,7 @@ def main(args: list[str]) -> int:
         ax.errorbar(range(len(rows)), median, yerr=[median - values.min(axis=1), values.max(axis=1) - median],
                     fmt="none", color="k", capsize=3)
         ax.axhline(goal, color="tab:red", linestyle="--", label=f"goal {goal}")
+        ax.set_ylim(0.0, 1.12 * max(np.nanmax(values), goal))   # the goal's line inside the frame
         ax.axhline(1.0, color="0.5", linewidth=0.8)
         ax.set_xticks(range(len(rows)), labels, fontsize=8)
         ax.set_title(title)
