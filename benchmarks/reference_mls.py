@@ -4,8 +4,9 @@ The elastic-block step that benchmarks/throughput.py also runs in Taichi and in
 Warp (benchmarks/frameworks/): quadratic B-splines, APIC (MLS: the stress folded
 into the affine momentum, Hu et al. 2018), compressible neo-Hookean Kirchhoff
 stress, float64, no boundary conditions (the block flies free over the few
-steps measured). One function per transfer, every loop written out for its
-dimension, each thread adding into its own copy of the grid (as the solver
+steps measured). Every loop written out for its dimension, the 2D per-particle
+and per-node work in helpers inlined into the loops (benchmarks/transfer_fusion.py
+reuses them), each thread adding into its own copy of the grid (as the solver
 does, solver/threads.py). Nothing of the solver is used, so it shows what the
 solver's generality costs.
 """

@@ -101,7 +101,7 @@ def compare(cells: int, threads: int, steps: int, repeats: int) -> dict:
             for _ in range(steps):
                 ref.advance(MLS_DT)
             times[name].append((time.perf_counter() - start) / steps / n * 1e9)
-    same = same and np.array_equal(unfused.x, fused.x) and np.array_equal(unfused.v, fused.v)
+    same = same and all(np.array_equal(getattr(unfused, k), getattr(fused, k)) for k in ("x", "v", "C", "F"))
     best = {k: min(v) for k, v in times.items()}
     ratios = [u / f for u, f in zip(times["unfused"], times["fused"])]
     return {"particles": n, "threads": threads, "same_bits": bool(same), "ns_unfused": best["unfused"],
