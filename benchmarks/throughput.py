@@ -127,17 +127,13 @@ def _framework(script: str, args: list[str], python: str, threads: int) -> dict:
 
 def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, warp_rate: dict) -> dict:
     """Particle-steps/s of the five implementations of one block at one thread count."""
-    sim = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
-    mls = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads, "mls")))
-    general = ExplicitMPM(load_scene(mls_block_scene(dim, cells, threads)))
-    general.use_general_kernels()
-    p = sim.particles
+    steppers = _solver_steppers(lambda transfer: mls_block_scene(dim, cells, threads, transfer), "apic")
+    p = steppers["mls"].particles
     start_x, start_v = p.x.copy(), p.v.copy()    # for Taichi and Warp, before the solver moves them
-    model = sim.materials[0][0]
+    model = steppers["mls"].materials[0][0]
     reference = ReferenceMLS(p.x, p.v, p.mass, p.volume, cells, model.lam, model.mu, threads)
     n = p.count
-    best = _alternate({"solver": sim, "mls": mls, "mls_unfolded": _unfolded(mls_block_scene(dim, cells, threads, "mls")),
-                       "general": general, "numba": reference}, threads, steps, MLS_DT, n)
+    best = _alternate({**steppers, "numba": reference}, threads, steps, MLS_DT, n)
     with tempfile.TemporaryDirectory() as tmp:
         block = Path(tmp) / "block.npz"
         np.savez(block, x=start_x, v=start_v, mass=p.mass, volume=p.volume, cells=cells, lam=model.lam,
@@ -149,16 +145,12 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
 def side_by_side_mpm88(threads: int, steps: int, python: str, warp_rate: dict) -> dict:
     """Particle-steps/s of the mpm88 fluid: the solver (APIC, MLS, MLS on the general kernels),
     the numba reference `step_mpm88`, Taichi and Warp, on the particles the solver seeded."""
-    apic = ExplicitMPM(load_scene(mpm88_scene(threads, "apic")))
-    mls = ExplicitMPM(load_scene(mpm88_scene(threads)))
-    general = ExplicitMPM(load_scene(mpm88_scene(threads)))
-    general.use_general_kernels()
-    p = mls.particles
+    steppers = _solver_steppers(lambda transfer: mpm88_scene(threads, transfer), "mls")
+    p = steppers["mls"].particles
     reference = ReferenceMPM88(p.x, p.v, p.mass, p.volume, 128, MPM88_BULK, MPM88_GRAVITY, threads)
     block = {"x": p.x.copy(), "v": p.v.copy(), "mass": p.mass, "volume": p.volume, "cells": 128,
              "bulk": MPM88_BULK, "gravity": MPM88_GRAVITY, "bound": ReferenceMPM88.BOUND, "dt": MPM88_DT}
-    best = _alternate({"solver": apic, "mls": mls, "mls_unfolded": _unfolded(mpm88_scene(threads)),
-                       "general": general, "numba": reference}, threads, steps, MPM88_DT, p.count)
+    best = _alternate({**steppers, "numba": reference}, threads, steps, MPM88_DT, p.count)
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "mpm88.npz"
         np.savez(path, **block)
@@ -180,6 +172,21 @@ def _frameworks(stem: str, state: Path, threads: int, steps: int, python: str, w
     return rates
 
 
+def _solver_steppers(scene_of, general_transfer: str) -> dict:
+    """The solver's steppers this run times, in the table's order, each built only if timed:
+    APIC, MLS, MLS unfolded and the general kernels (with `general_transfer`); MLS alone with
+    --mls-only, no general kernels with --no-general. scene_of(transfer) gives the scene."""
+    steppers = {"mls": ExplicitMPM(load_scene(scene_of("mls")))}
+    if MLS_ONLY:
+        return steppers
+    steppers = {"solver": ExplicitMPM(load_scene(scene_of("apic"))), **steppers,
+                "mls_unfolded": _unfolded(scene_of("mls"))}
+    if GENERAL:
+        steppers["general"] = ExplicitMPM(load_scene(scene_of(general_transfer)))
+        steppers["general"].use_general_kernels()
+    return steppers
+
+
 def _unfolded(scene: dict) -> ExplicitMPM:
     """The solver's MLS step as it was before the fused P2G folded dt f_I into the momentum
     (solver/step/fused.py `folds_force`): the force scattered on its own, same step to round-off."""
@@ -192,11 +199,6 @@ def _alternate(contenders: dict, threads: int, steps: int, dt: float, n: int) ->
     """Best of three rates of each stepper, taking turns (the general kernels run a quarter of the steps)."""
     import numba
 
-    if not GENERAL or MLS_ONLY:
-        contenders.pop("general")
-    if MLS_ONLY:
-        contenders.pop("solver")
-        contenders.pop("mls_unfolded")
     for stepper in contenders.values():     # compile, and set the thread count each uses
         numba.set_num_threads(threads)
         stepper.advance(dt)

@@ -26,6 +26,10 @@ arrays ran faster than slices of one scratch array allocated before the prange
 (likely: the compiler cannot rule out that a slice aliases what the loop writes)
 (measured on one thread: update_kinematics 1.8x slower with slices, 3.9x with the
 lengths taken outside the prange as well; P2G 1.5x, G2P 2.2x).
+
+The block loops index particles and nodes with unsigned integers (`range(np.uint64(start),
+np.uint64(stop))`, `np.uint64(idx[p, k])`): numba wraps a negative signed index around, a
+compare and a select at every access; unsigned ones skip it (docs/internals.md).
 """
 from __future__ import annotations
 
@@ -75,7 +79,7 @@ def _p2g_block(dims, nodes, start, stop, idx, w, dw, mass, vel, volume, stress, 
     vs = np.empty((dim, dim))   # V_p sigma_p, hoisted out of the node loop
     mv = np.empty(dim)
     ma = np.empty(dim)
-    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
+    for p in range(np.uint64(start), np.uint64(stop)):
         m = mass[p]
         vol = volume[p]
         ap = np.uint64(0) if shared_acc else p
@@ -113,7 +117,7 @@ def p2g_mass_momentum(spec, idx, w, mass, vel, grid_mass, grid_mom, copies_mass,
 @njit(cache=True)
 def _mass_momentum_block(dims, nodes, start, stop, idx, w, mass, vel, grid_mass, grid_mom):
     dim, nk = len(dims), len(nodes)
-    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
+    for p in range(np.uint64(start), np.uint64(stop)):
         m = mass[p]
         for k in range(nk):
             node = np.uint64(idx[p, k])
@@ -140,7 +144,7 @@ def p2g_force(spec, idx, w, dw, mass, volume, stress, acc, grid_force, copies_fo
 def _force_block(dims, nodes, start, stop, idx, w, dw, mass, volume, stress, acc, grid_force):
     dim, nk = len(dims), len(nodes)
     shared_acc = acc.shape[0] == 1
-    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
+    for p in range(np.uint64(start), np.uint64(stop)):
         m = mass[p]
         vol = volume[p]
         ap = np.uint64(0) if shared_acc else p
@@ -223,7 +227,7 @@ def _g2p_block(dims, nodes, start, stop, idx, w, dt, flip_ratio, v_old, v_new, x
     dim, nk = len(dims), len(nodes)
     v_pic = np.zeros(dim)
     dv = np.zeros(dim)
-    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
+    for p in range(np.uint64(start), np.uint64(stop)):
         for a in range(dim):
             v_pic[a] = 0.0
             dv[a] = 0.0
@@ -275,7 +279,7 @@ def _kinematics_block(dims, nodes, start, stop, idx, dw, v_grid, dt, L, F, volum
     # (the two updates are written out here: as inlined helper functions the
     # total-Lagrangian one ran 1.6x slower, measured on the E6 square)
     bad = -1
-    for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
+    for p in range(np.uint64(start), np.uint64(stop)):
         G[:, :] = 0.0
         for k in range(nk):
             node = np.uint64(idx[p, k])
