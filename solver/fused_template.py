@@ -230,9 +230,26 @@ def _field_shift(contact: bool) -> list[str]:
     return ["shift = field_of_body[body[p]] * n_nodes"] if contact else []
 
 
-def _p2g_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
+def _stress_of_particle(dim: int, stress: tuple | None) -> list[str]:
+    """sig{a}{b}, the in-plane entries of sigma_p: read from the stored stress, or with `stress`
+    (a material's (name, lines), solver/step/fused.py `forms_stress`) and the compile-time
+    `inline`, formed from F_p by the material's lines, which see f{a}{b} (F_p), fj (det F_p,
+    as solver/kernels.py's `determinant`) and q0, q1, ... (its parameters)."""
+    stored = _tensor("sig{a}{b} = stress[p, {a}, {b}]", dim)
+    if stress is None:
+        return stored
+    return ["if inline:   # the material's stress pass was put off: sigma_p from F_p, as it computes it",
+            *_indent(_tensor("f{a}{b} = F[p, {a}, {b}]", dim), 1),
+            f"    fj = {_determinant(list(range(dim)), list(range(dim)), 'f')}",
+            *_indent(list(stress[1]), 1),
+            "else:",
+            *_indent(stored, 1)]
+
+
+def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
     mc = [f"mc{a}{b}" for a in range(dim) for b in range(dim)]
     return [
+        *_stress_of_particle(dim, stress),   # first: little is live across its log()
         *_axes(dim, ok=True),
         f"if not ({_each('ok{c}', dim, ' and ')}):      # (no break: an early exit slows the whole loop)",
         "    if bad[t] < 0:",
@@ -246,11 +263,11 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
         "if fold:   # dt f_I into the momentum: w (m v + dt m b + (m C - dt V sigma D^-1)(x_I - x_p))",
         "    if loaded:   # (without a body force dt m b is +0: adding it would change no sum)",
         *_indent(_each_line("mv{c} += dt * mb{c}", dim), 2),
-        *_indent(_tensor("s{a}{b} = dt * (vol * stress[p, {a}, {b}] * d_inv{b})", dim), 1),
+        *_indent(_tensor("s{a}{b} = dt * (vol * sig{a}{b} * d_inv{b})", dim), 1),
         "elif mls:",
-        *_indent(_tensor("s{a}{b} = vol * stress[p, {a}, {b}] * d_inv{b}", dim), 1),
+        *_indent(_tensor("s{a}{b} = vol * sig{a}{b} * d_inv{b}", dim), 1),
         "else:",
-        *_indent(_tensor("s{a}{b} = vol * stress[p, {a}, {b}]", dim), 1),
+        *_indent(_tensor("s{a}{b} = vol * sig{a}{b}", dim), 1),
         _zeros(mc) + "   # m_p C_p (C holds one placeholder row without APIC)",
         "if affine:",
         *_indent(_tensor("mc{a}{b} = m * C[p, {a}, {b}]", dim), 1),
@@ -264,10 +281,11 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
     ]
 
 
-def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
+def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
     return _shell(
-        "p2g(variant, x, v, C, mass, volume, stress, acc, frame, d_inv, grid_mass, grid_mom, grid_force,\n"
-        "        copies_mass, copies_mom, copies_force, bad, dt"
+        "p2g(variant, x, v, C, mass, volume, stress, F, material, acc, frame, d_inv, grid_mass, grid_mom,\n"
+        "        grid_force,"
+        " copies_mass, copies_mom, copies_force, bad, dt"
         + (",\n        capacity, T, heat_flux, heat, copies_heat" if thermal else "")
         + (",\n        body, field_of_body, n_nodes, presence, gradient, copies_presence, copies_gradient"
            if contact else "") + ")",
@@ -275,26 +293,29 @@ def _p2g(dim: int, thermal: bool, contact: bool) -> list[str]:
         "    sum_p m_p w b_p - V_p sigma_p grad w (MLS: w D_p^-1 (x_I - x_p) for grad w). bad[t]: first\n"
         "    particle of block t outside the grid. `fold` (MLS only): f_I is not formed, dt f_I is\n"
         "    added into (mv)_I instead (grid_force untouched).\n\n"
-        "    variant: (support, affine, loaded, mls, fold) constants; frame: (lower, h, inv_h, cells,\n"
-        "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
-        "    the other threads."
+        "    variant: (support, affine, loaded, mls, fold, inline) constants; frame: (lower, h, inv_h,\n"
+        "    cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
+        "    the other threads. `inline`: sigma_p is formed from F and the material's parameters\n"
+        "    `material` (where the module has a material's lines), not read from `stress`."
         + ("\n\n    Conduction: heat (n, 3), zeroed here, gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p."
            if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes;\n"
            "    presence gets V_p w and gradient m_p grad w per field (zeroed by the caller)." if contact else ""),
-        ["support, affine_, loaded_, mls_, fold_ = variant",
+        ["support, affine_, loaded_, mls_, fold_, inline_ = variant",
+         *([f"{', '.join(f'q{k}' for k in range(stress[2]))}{',' if stress[2] == 1 else ''} = "
+            + ", ".join(f"material[{k}]" for k in range(stress[2]))] if stress else []),
          "lower, h, inv_h, cells, strides, offset = frame",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
          "threads = copies_mass.shape[0] + 1",
          "shared_acc = acc.shape[0] == 1"],
         ["S, affine, loaded, mls = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2, mls_.ndim == 2"
          "   # compile-time constants",
-         "fold = fold_.ndim == 2",
+         "fold, inline = fold_.ndim == 2, inline_.ndim == 2",
          "gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
          "gf = grid_force if fold else own(t, grid_force, copies_force)",
          *(["th = own_zeroed(t, heat, copies_heat)"] if thermal else []),
          *(["pr, gr = own(t, presence, copies_presence), own(t, gradient, copies_gradient)"] if contact else [])],
-        _p2g_particle(dim, thermal, contact),
+        _p2g_particle(dim, thermal, contact, stress),
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
          "else:",
@@ -387,15 +408,15 @@ def _deformation_gradient(dim: int) -> list[str]:
             *_tensor("F[p, {a}, {b}] = n{a}{b}", dim)]
 
 
-def _determinant(rows: list[int], columns: list[int]) -> str:
+def _determinant(rows: list[int], columns: list[int], name: str = "n") -> str:
     """det of the new F (n) expanded along its first row, as solver/kernels.py's `determinant`:
     n00 * (n11 * n22 - n12 * n21) - n01 * (...) + n02 * (...); in 2D n00 * n11 - n01 * n10."""
     if len(rows) == 1:
-        return f"n{rows[0]}{columns[0]}"
+        return f"{name}{rows[0]}{columns[0]}"
     text = ""
     for n, c in enumerate(columns):
-        minor = _determinant(rows[1:], [d for d in columns if d != c])
-        term = f"n{rows[0]}{c} * " + (f"({minor})" if len(rows) > 2 else minor)
+        minor = _determinant(rows[1:], [d for d in columns if d != c], name)
+        term = f"{name}{rows[0]}{c} * " + (f"({minor})" if len(rows) > 2 else minor)
         text += term if n == 0 else (" - " if n % 2 else " + ") + term
     return text
 
@@ -426,7 +447,8 @@ def _g2p_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
         *_indent(_each_line("x[p, {a}] += dt * rate[p, {a}]", dim), 1),
         "if mls:   # L_p = B_p D_p^-1: C_p itself after a USL gather",
         *_indent(_tensor("l{a}{b} = b{a}{b} * d_inv{b}", dim), 1),
-        *_tensor("L[p, {a}, {b}] = l{a}{b}", dim),
+        "if not l_is_c:   # (else L_p is left to the particles' deferred update, solver/step/fused.py)",
+        *_indent(_tensor("L[p, {a}, {b}] = l{a}{b}", dim), 1),
         *_deformation_gradient(dim),
         f"J = {_determinant(list(range(dim)), list(range(dim)))}",
         "volume[p] = J * volume0[p]",
@@ -447,21 +469,22 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
         "    m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:\n"
         "    L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.\n"
         "    bad[t]: first particle of block t whose J = det F is not positive.\n\n"
-        "    variant: (support, mode, affine, blend, mls) constants; frame: (lower, h, inv_h, cells,\n"
-        "    strides, offset); d_inv: D_p^-1 per axis (APIC, MLS)."
+        "    variant: (support, mode, affine, blend, mls, l_is_c) constants; frame: (lower, h, inv_h,\n"
+        "    cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS). `l_is_c` (MLS, USL): L_p,\n"
+        "    which is C_p, is not written."
         + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w T_change (T~_I - T_I) and sum w m c T_p into\n"
            "    `remapped` (zeroed here); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
            "    then being the remapped T_I^{t+dt}." if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes."
            if contact else ""),
-        ["support, mode_, affine_, blend_, mls_ = variant",
+        ["support, mode_, affine_, blend_, mls_, l_is_c_ = variant",
          "lower, h, inv_h, cells, strides, offset = frame",
          "threads = copies_mom.shape[0] + 1",
          "remaps = mode_.ndim - 1 == REMAP",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"],
         ["S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2"
          "   # compile-time constants",
-         "mode = mode_.ndim - 1",
+         "mode, l_is_c = mode_.ndim - 1, l_is_c_.ndim == 2",
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
          *(["tr = own_zeroed(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
         _g2p_particle(dim, thermal, contact),
@@ -472,27 +495,30 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
 
 # -- the generated module ------------------------------------------------------------
 
-def source(dim: int, thermal: bool = False, contact: bool = False) -> str:
+def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None) -> str:
     """The text of the module of the fused kernels for `dim` (2 or 3) dimensions; with
     `thermal`, the kernels that carry conduction too, with `contact` those that step a
     velocity field per body (a scene without them never loads those: its module's text, and
-    so its kernels, are those of a template without heat or contact)."""
+    so its kernels, are those of a template without heat or contact); with `stress`, a
+    material's (name, lines, number of parameters), a P2G that can form sigma_p from F_p
+    (`_stress_of_particle`)."""
     if thermal and contact:
         raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
-    header = (HEADER.format(dim=dim) + (THERMAL_IMPORTS if thermal else "")
+    header = (HEADER.format(dim=dim) + ("\nimport math" if stress else "") + (THERMAL_IMPORTS if thermal else "")
               + ("\nfrom solver.fused import _reduce_with" if contact else ""))
-    return "\n".join([header, *_p2g(dim, thermal, contact), *_g2p(dim, thermal, contact)]) + "\n"
+    return "\n".join([header, *_p2g(dim, thermal, contact, stress), *_g2p(dim, thermal, contact)]) + "\n"
 
 
-def _stem(dim: int, thermal: bool, contact: bool) -> str:
-    return f"fused_{dim}d" + ("_thermal" if thermal else "") + ("_contact" if contact else "")
+def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> str:
+    return (f"fused_{dim}d" + ("_thermal" if thermal else "") + ("_contact" if contact else "")
+            + (f"_{stress[0]}" if stress else ""))
 
 
-def write(dim: int, thermal: bool = False, contact: bool = False) -> Path:
+def write(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None) -> Path:
     """The generated file for `dim`, (re)written only when its text changed (solver/generated.py)."""
-    return generated.write("fused", _stem(dim, thermal, contact), source(dim, thermal, contact))
+    return generated.write("fused", _stem(dim, thermal, contact, stress), source(dim, thermal, contact, stress))
 
 
-def load(dim: int, thermal: bool = False, contact: bool = False):
+def load(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None):
     """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
-    return generated.load("fused", _stem(dim, thermal, contact), source(dim, thermal, contact))
+    return generated.load("fused", _stem(dim, thermal, contact, stress), source(dim, thermal, contact, stress))

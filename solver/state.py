@@ -10,6 +10,30 @@ from solver.expressions import compile_expression
 from solver.seeding import seed
 
 
+class _Deferred:
+    """A per-particle array whose update a step may put off (`Particles.defer`): the fused
+    step forms the stress of a material that is a function of F_p alone inside P2G, and
+    MLS's L_p after a USL gather is C_p (solver/step/fused.py), so the step need not store
+    them. Any read of the attribute runs the pending update first, so what outputs, checks,
+    checkpoints, materials and hooks read is always the current state; assigning the array
+    drops the pending update (the new array is the state)."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, particles, owner=None):
+        if particles is None:   # (the dataclass asks the class for a default: there is none)
+            raise AttributeError(self.name)
+        update = particles._pending.pop(self.name, None) if particles._pending else None
+        if update is not None:
+            update()
+        return particles.__dict__[self.name]
+
+    def __set__(self, particles, value) -> None:
+        particles.__dict__.setdefault("_pending", {}).pop(self.name, None)
+        particles.__dict__[self.name] = value
+
+
 @dataclass
 class Particles:
     """One contiguous array per particle quantity, particles sorted by material."""
@@ -17,8 +41,8 @@ class Particles:
     x: np.ndarray          # (n, dim) current position
     v: np.ndarray          # (n, dim) velocity
     F: np.ndarray          # (n, dim, dim) deformation gradient
-    L: np.ndarray          # (n, dim, dim) velocity gradient of the last step
-    stress: np.ndarray     # (n, 3, 3) Cauchy stress
+    L: np.ndarray = _Deferred()        # (n, dim, dim) velocity gradient of the last step
+    stress: np.ndarray = _Deferred()   # (n, 3, 3) Cauchy stress
     mass: np.ndarray       # (n,)
     volume: np.ndarray     # (n,) current volume
     volume0: np.ndarray    # (n,) reference volume
@@ -36,6 +60,21 @@ class Particles:
     @property
     def dimension(self) -> int:
         return self.x.shape[1]
+
+    def defer(self, name: str, update) -> None:
+        """Put the update of the array `name` off: `update()` brings it up to date, and runs at
+        its first read (`_Deferred`) unless the step forms it itself first. (`_pending`, name ->
+        update, is made by the first assignment of a `_Deferred` array.)"""
+        self._pending[name] = update
+
+    def pending(self, name: str) -> bool:
+        """Whether the stored array `name` is out of date, its update put off (`defer`)."""
+        return name in self._pending
+
+    def stored(self, name: str) -> np.ndarray:
+        """The array `name` as stored, without running a pending update: for a kernel that
+        forms or overwrites it itself while it is pending."""
+        return self.__dict__[name]
 
     def require(self, name: str, tail: tuple[int, ...] = (), fill: float = 0.0) -> np.ndarray:
         """The extra per-particle array `name`, allocated (filled with `fill`) on first use."""

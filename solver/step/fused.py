@@ -37,8 +37,12 @@ class FusedPhases(Phases):
         sim.formulation.place_particles(sim.particles)
         method = sim.scene.method
         self._support = fused.support_of(method.shape_function)
+        self._stress_model = _stress_model(sim)
+        stress = None if self._stress_model is None else (
+            sim.scene.materials[next(iter(sim.scene.materials))].model,
+            self._stress_model.stress_lines(sim.scene.dimension), len(self._stress_model.stress_parameters()))
         self._kernels = fused.kernels(sim.scene.dimension, thermal=sim.conduction is not None,
-                                      contact=sim.field_contact is not None)
+                                      contact=sim.field_contact is not None, stress=stress)
         apic_d = shape.REGISTRY[method.shape_function].apic_d
         # APIC's (and MLS's) D_p^-1 per axis (unused without them); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
@@ -58,10 +62,14 @@ class FusedPhases(Phases):
         self._bad = np.empty(sim.threads, dtype=np.int64)   # each block's first failing particle
         affine, blend = fused.constant(apic), fused.constant(sim.flip_ratio > 0.0)
         mls = fused.constant(apic and sim.affine.mls)
-        self._p2g_variants = {fold: (self._support, affine, fused.constant(sim.loads.any), mls, fused.constant(fold))
-                              for fold in (False, True)}
-        self._g2p_variants = {mode: (self._support, fused.constant(mode), affine, blend, mls)
-                              for mode in (fused.USL, fused.REMAP, fused.KINEMATICS)}
+        self._p2g_variants = {(fold, inline): (self._support, affine, fused.constant(sim.loads.any), mls,
+                                               fused.constant(fold), fused.constant(inline))
+                              for fold in (False, True) for inline in (False, True)}
+        model = self._stress_model
+        self._stress_parameters = model.stress_parameters() if model is not None else np.zeros(0)
+        self._g2p_variants = {(mode, l_is_c): (self._support, fused.constant(mode), affine, blend, mls,
+                                               fused.constant(l_is_c))
+                              for mode in (fused.USL, fused.REMAP, fused.KINEMATICS) for l_is_c in (False, True)}
 
     def weights(self) -> None:
         """Nothing to store: every kernel evaluates the weights it needs."""
@@ -79,13 +87,23 @@ class FusedPhases(Phases):
         return (sim.affine is not None and sim.affine.mls and sim.flip_ratio == 0.0
                 and not sim.hooks.after_forces and not sim.hooks.before_update)
 
+    def forms_stress(self) -> bool:
+        """Whether P2G forms sigma_p from F_p, so that the stress pass can wait until something
+        reads the stress (Particles.defer): for a scene of one material whose stress is a
+        function of F_p alone (a model with `stress_lines`: neo-Hookean), when no hook changes
+        the stress after the update (thermal expansion, F-bar). The stress the pass would store
+        is used to the bit, one pass over the particles and the stress's writes and reads less."""
+        return self._stress_model is not None and not self.sim.hooks.after_stress
+
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
         p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
-        variant = self._p2g_variants[self.folds_force()]
-        self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stress, acc, self._frame,
-                          self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt,
-                          *self._heat_p2g(), *self._contact_p2g())
+        # inline only while the update is put off: a stress stored since (read, or set by a
+        # checkpoint or an initial stress) is the state, and is read
+        variant = self._p2g_variants[self.folds_force(), p.pending("stress")]
+        self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stored("stress"), p.F,
+                          self._stress_parameters, acc, self._frame, self._d_inv, g.mass, g.momentum, g.force,
+                          c.mass, c.momentum, c.force, bad, self.dt, *self._heat_p2g(), *self._contact_p2g())
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -120,9 +138,15 @@ class FusedPhases(Phases):
     def _g2p(self, dt: float, mode: int) -> None:
         sim = self.sim
         p, g, bad = sim.particles, sim.grid, self._bad
-        self._kernels.g2p(self._g2p_variants[mode], p.x, p.v, self._affine_matrix, p.mass, p.L, p.F, p.volume,
-                          p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, dt,
-                          self._d_inv, sim.copies.momentum, bad, *self._heat_g2p(mode), *self._contact_g2p())
+        # MLS's USL gather: L_p = B_p D_p^-1 is C_p to the bit, copied only when something reads it
+        # (where the stress is formed in P2G, no material reads it at each step)
+        l_is_c = mode == fused.USL and sim.affine is not None and sim.affine.mls and self.forms_stress()
+        self._kernels.g2p(self._g2p_variants[mode, l_is_c], p.x, p.v, self._affine_matrix, p.mass, p.stored("L"),
+                          p.F, p.volume, p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum,
+                          sim.flip_ratio, dt, self._d_inv, sim.copies.momentum, bad, *self._heat_g2p(mode),
+                          *self._contact_g2p())
+        if l_is_c:
+            p.defer("L", lambda: np.copyto(p.stored("L"), self._affine_matrix))
         sim.check_inversion(first_of(bad))
 
     # -- conduction (nothing without it) ----------------------------------------------------
@@ -161,3 +185,12 @@ class FusedPhases(Phases):
         if contact is None:
             return ()
         return self.sim.particles.body, contact.field_of_body, self.sim.grid.n_nodes
+
+
+def _stress_model(sim):
+    """The scene's one material where its stress is a function of F_p alone (`stress_lines`)."""
+    models = {id(model): model for model, _ in sim.materials}
+    if len(sim.scene.materials) != 1 or len(models) != 1:
+        return None
+    model = next(iter(models.values()))
+    return model if hasattr(model, "stress_lines") else None

@@ -123,9 +123,22 @@ class Phases:
             hook(self.sim, dt, v_grid)
 
     def stress(self, dt: float) -> None:
-        """sigma_p from the materials (line 28)."""
+        """sigma_p from the materials (line 28); put off (Particles.defer) where the
+        backend's P2G forms it from F_p itself (`forms_stress`)."""
+        sim = self.sim
+        if self.forms_stress():
+            sim.particles.defer("stress", lambda: self._material_stress(dt))
+            return
+        self._material_stress(dt)
+        for hook in sim.hooks.after_stress:
+            hook(sim, dt)
+
+    def _material_stress(self, dt: float) -> None:
         sim = self.sim
         for material, sl in sim.materials:
             material.update_stress(sim.particles, sl, dt)
-        for hook in sim.hooks.after_stress:
-            hook(sim, dt)
+
+    def forms_stress(self) -> bool:
+        """Whether the next P2G forms sigma_p from F_p, so that the stress update can wait
+        until something reads the stress (solver/step/fused.py)."""
+        return False

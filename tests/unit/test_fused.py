@@ -291,3 +291,62 @@ def test_a_scene_without_contact_loads_the_kernels_of_a_template_without_contact
         assert "field_of_body" in fields and "presence" in fields
     sim = ExplicitMPM(load_scene({**SCENE_2D, "contact": CONTACT}))
     assert sim.phases._kernels is fused.kernels(2, contact=True) and sim.stencil is None
+
+
+# -- the stress formed inside P2G (a material whose stress is a function of F alone) ----------
+
+NEO_HOOKEAN = {"model": "neo_hookean", "density": 1000, "youngs_modulus": 1e4, "poisson_ratio": 0.3}
+
+
+@pytest.mark.parametrize("dimension,method,threads", [
+    (2, "usl-quadratic-mls", 1), (3, "usl-quadratic-mls", 2), (2, "musl-quadratic-apic", 2), (2, "usl-linear-pic", 1)])
+def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(dimension, method, threads):
+    """A neo-Hookean scene's fused P2G forms sigma_p from F_p and the stress pass is put off
+    (Particles.defer); with MLS's USL gather L_p (= C_p) is not written either. The same
+    operations in the same order: the state is that of the step that stores both, to the bit."""
+    scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
+    scene["materials"]["m"] = NEO_HOOKEAN
+    scene = load_scene({**scene, "method": METHODS[method], "parallel": {"threads": threads}})
+    formed, stored = ExplicitMPM(scene), ExplicitMPM(scene)
+    assert formed.phases.forms_stress()
+    stored.phases.forms_stress = lambda: False
+    for _ in range(STEPS):
+        formed.advance(2e-4)
+        stored.advance(2e-4)
+    a, b = formed.particles, stored.particles
+    assert a.pending("stress") and not b.pending("stress")
+    assert a.pending("L") is (method == "usl-quadratic-mls") and not b.pending("L")
+    for name in ("x", "v", "F", "L", "stress", "volume"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert not a.pending("stress") and not a.pending("L")
+
+
+@pytest.mark.parametrize("extra", [
+    {"materials": {"m": NEO_HOOKEAN, "n": SCENE_2D["materials"]["m"]}},          # two materials
+    {"materials": {"m": SCENE_2D["materials"]["m"]}},                           # a rate (hypoelastic) model
+    {"method": {**METHODS["usl-quadratic-mls"], "fbar": True}},                 # a hook after the stress update
+])
+def test_the_stress_pass_runs_where_p2g_cannot_form_the_stress(extra):
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"] = {"m": NEO_HOOKEAN}
+    scene["method"] = METHODS["usl-quadratic-mls"]
+    scene.update(copy.deepcopy(extra))
+    if "n" in scene["materials"]:
+        scene["bodies"][1]["material"] = "n"
+    sim = ExplicitMPM(load_scene(scene))
+    sim.advance(2e-4)
+    assert not sim.phases.forms_stress()
+    assert not sim.particles.pending("stress") and not sim.particles.pending("L")
+
+
+def test_an_initial_stress_is_read_by_the_first_p2g():
+    """P2G forms the stress only while the update is put off: a stress set before the first step
+    (or by a checkpoint) is the state, and is what the first step's P2G reads."""
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"] = {"m": NEO_HOOKEAN}
+    scene["method"] = METHODS["usl-quadratic-mls"]
+    prestressed, free = ExplicitMPM(load_scene(scene)), ExplicitMPM(load_scene(scene))
+    prestressed.particles.stress[:, 0, 0] = -1e3
+    prestressed.advance(2e-4)
+    free.advance(2e-4)
+    assert not np.array_equal(prestressed.particles.v, free.particles.v)

@@ -38,3 +38,24 @@ def test_take_reorders_every_array_consistently():
     assert np.array_equal(p.id, ids) and np.array_equal(p.x, x)
     assert np.array_equal(p.extra["temperature"], order.astype(float))
     assert all(a.shape[0] == order.size and a.flags.c_contiguous for a in p.arrays().values())
+
+
+def test_a_deferred_array_is_brought_up_to_date_at_its_first_read_only():
+    """Particles.defer: the update runs once, at the first read (also through arrays(), which
+    checkpoints and migration use); stored() reads without it; an assignment drops it."""
+    p = _particles()
+    runs = []
+
+    def update():
+        runs.append(1)
+        p.stored("stress")[:] = 7.0
+
+    p.defer("stress", update)
+    assert p.pending("stress") and np.all(p.stored("stress") == 0.0) and not runs
+    assert np.all(p.stress == 7.0) and len(runs) == 1 and not p.pending("stress")
+    assert np.all(p.stress == 7.0) and len(runs) == 1
+    p.defer("stress", update)
+    assert np.all(p.arrays()["stress"] == 7.0) and len(runs) == 2
+    p.defer("stress", update)
+    p.stress = np.zeros_like(p.stored("stress"))
+    assert not p.pending("stress") and np.all(p.stress == 0.0) and len(runs) == 2

@@ -64,6 +64,22 @@ class NeoHookean(IsotropicElastic):
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.F[sl], particles.stress[sl], self.lam, self.mu)
 
+    def stress_lines(self, dim: int) -> tuple[str, ...]:
+        """The in-plane stress as the fused P2G forms it from F_p (solver/fused_template.py
+        `_stress_of_particle`: f{a}{b} are F_p's entries, fj its determinant, q0, q1 lambda and
+        mu): `_update_one`'s operations in its order, so the same bits as the stored stress."""
+        lines = ["nh_c = q0 * math.log(fj) / fj"]
+        for a in range(dim):
+            for b in range(dim):
+                bab = " + ".join(["0.0"] + [f"f{a}{k} * f{b}{k}" for k in range(dim)])
+                tail = "- 1.0) + nh_c" if a == b else "- 0.0) + 0.0"
+                lines.append(f"sig{a}{b} = q1 / fj * (({bab}) {tail}")
+        return tuple(lines)
+
+    def stress_parameters(self) -> np.ndarray:
+        """q0, q1 of `stress_lines`."""
+        return np.array([self.lam, self.mu])
+
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         out = np.empty(sl.stop - sl.start)
         _energy(particles.F[sl], particles.volume0[sl], self.lam, self.mu, out)
