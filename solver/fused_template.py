@@ -33,6 +33,12 @@ With the compile-time `fold` (MLS, where nothing reads f_I: solver/step/fused.py
 `folds_force`), P2G scatters m_I and (mv)_I + dt f_I only: dt m_p b_p joins m_p v_p and
 dt V_p sigma_p D_p^-1 is taken from m_p C_p once per particle, as MLS-MPM codes do.
 
+With a material's stress lines (`source(..., stress=)`: a model whose stress is a function of
+F alone, solver/step/fused.py `forms_stress`) and the compile-time `inline`, P2G forms sigma_p
+from F_p with them, first in the particle's body (its log() then spills little), instead of
+reading the stored stress; the module is fused_{dim}d_<model>. With the compile-time `l_is_c`
+(MLS, USL) G2P does not write L_p, which is C_p.
+
 The particle index p and the node index are unsigned (np.uint64): numba wraps a
 negative signed index around (x[-1] is the last row), so every x[p, a], gp[node, a]
 with a signed index carries a compare and a select, unless LLVM can prove the index
@@ -231,10 +237,10 @@ def _field_shift(contact: bool) -> list[str]:
 
 
 def _stress_of_particle(dim: int, stress: tuple | None) -> list[str]:
-    """sig{a}{b}, the in-plane entries of sigma_p: read from the stored stress, or with `stress`
-    (a material's (name, lines), solver/step/fused.py `forms_stress`) and the compile-time
-    `inline`, formed from F_p by the material's lines, which see f{a}{b} (F_p), fj (det F_p,
-    as solver/kernels.py's `determinant`) and q0, q1, ... (its parameters)."""
+    """sig{a}{b}, the in-plane entries of sigma_p: read from the stored stress, or, with `stress`
+    (a material's name, lines and number of parameters: solver/step/fused.py `forms_stress`)
+    and the compile-time `inline`, formed from F_p by the material's lines, which see f{a}{b}
+    (F_p), fj (det F_p, as solver/kernels.py's `determinant`) and q0, q1, ... (its parameters)."""
     stored = _tensor("sig{a}{b} = stress[p, {a}, {b}]", dim)
     if stress is None:
         return stored
@@ -284,8 +290,7 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
 def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
     return _shell(
         "p2g(variant, x, v, C, mass, volume, stress, F, material, acc, frame, d_inv, grid_mass, grid_mom,\n"
-        "        grid_force,"
-        " copies_mass, copies_mom, copies_force, bad, dt"
+        "        grid_force, copies_mass, copies_mom, copies_force, bad, dt"
         + (",\n        capacity, T, heat_flux, heat, copies_heat" if thermal else "")
         + (",\n        body, field_of_body, n_nodes, presence, gradient, copies_presence, copies_gradient"
            if contact else "") + ")",
