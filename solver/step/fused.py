@@ -37,10 +37,10 @@ class FusedPhases(Phases):
         sim.formulation.place_particles(sim.particles)
         method = sim.scene.method
         self._support = fused.support_of(method.shape_function)
-        self._stress_model = _stress_model(sim)
-        stress = None if self._stress_model is None else (
-            sim.scene.materials[next(iter(sim.scene.materials))].model,
-            self._stress_model.stress_lines(sim.scene.dimension), len(self._stress_model.stress_parameters()))
+        model = self._stress_model = _stress_model(sim)
+        stress = None if model is None else (   # (the scene's one material names the generated module)
+            next(iter(sim.scene.materials.values())).model, model.stress_lines(sim.scene.dimension),
+            len(model.stress_parameters()))
         self._kernels = fused.kernels(sim.scene.dimension, thermal=sim.conduction is not None,
                                       contact=sim.field_contact is not None, stress=stress)
         apic_d = shape.REGISTRY[method.shape_function].apic_d
