@@ -34,9 +34,10 @@ With the compile-time `fold` (MLS, where nothing reads f_I: solver/step/fused.py
 dt V_p sigma_p D_p^-1 is taken from m_p C_p once per particle, as MLS-MPM codes do.
 
 With a material's stress lines (`source(..., stress=)`: a model whose stress is a function of
-F alone, solver/step/fused.py `forms_stress`) and the compile-time `inline`, P2G forms sigma_p
-from F_p with them, first in the particle's body (its log() then spills little), instead of
-reading the stored stress; the module is fused_{dim}d_<model>. With the compile-time `l_is_c`
+what P2G reads, F_p for neo-Hookean, L_p and V_p / V0_p for the fluid: solver/step/fused.py
+`forms_stress`) and the compile-time `inline`, P2G forms sigma_p with them, first in the
+particle's body (a log() then spills little), instead of reading the stored stress; the
+module is fused_{dim}d_<model>_<digest of its text>. With the compile-time `l_is_c`
 (MLS, USL) G2P does not write L_p, which is C_p.
 
 The particle index p and the node index are unsigned (np.uint64): numba wraps a
@@ -138,9 +139,9 @@ def _stencil(dim: int, body: list[str], gradients: bool, contact: bool) -> list[
     lines, level = [], 0
     for a in range(dim - 1, 0, -1):
         c, i = AXES[a], LOOPS[a]
-        lines += _indent([f"for {i} in range(S):", f"    d{c} = ({i} - f{c}) * h[{a}]"], level)
+        lines += _indent([f"for {i} in range(S):", f"    d{c} = ({i} - f{c}) * h{a}"], level)
         level += 1
-    row = " + ".join(f"(i{AXES[a]} + {LOOPS[a]}) * strides[{a}]" for a in range(1, dim))
+    row = " + ".join(f"(i{AXES[a]} + {LOOPS[a]}) * stride{a}" for a in range(1, dim))
     lines += _indent([f"row = {row} - offset" + (" + shift" if contact else ""), *_products(dim, gradients),
                       "for i in range(S):",
                       "    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)"], level)
@@ -161,6 +162,16 @@ def _shell(signature: str, docstring: str, before: list[str], per_thread: list[s
             *_indent(after, 1)]
 
 
+def _frame(dim: int) -> list[str]:
+    """The frame, with the spacing and strides the node loops read as scalars: there numba
+    cannot tell the frame's arrays from the nodal arrays written, and reads them again at every
+    node (G2P 4 % slower, mpm88 at one thread). The per-particle `_axis` keeps its reads
+    (as scalars too, held across the loop, G2P lost that 4 % again)."""
+    return ["lower, h, inv_h, cells, strides, offset = frame",
+            f"{_each('h{a}', dim)} = {_each('h[{a}]', dim)}",
+            *[f"stride{a} = strides[{a}]" for a in range(1, dim)]]
+
+
 def _axes(dim: int, ok: bool) -> list[str]:
     """First node, position in cells, weights and gradients per axis (and whether inside)."""
     return [f"{'ok' + c if ok else '_'}, i{c}, f{c}, w{c}, g{c} = _axis(S, x[p, {a}], lower[{a}], inv_h[{a}], cells[{a}])"
@@ -179,7 +190,7 @@ def _p2g_node(dim: int, thermal: bool, contact: bool) -> list[str]:
     return [
         f"w = wx[i] * {_outer(dim)}",
         "if affine:",
-        "    dx = (i - fx) * h[0]",
+        "    dx = (i - fx) * h0",
         "if fold:",
         "    pass",
         "elif mls:   # w (x_I - x_p); D_p^-1 is in s (the MLS gradient, solver/transfer.py)",
@@ -239,14 +250,17 @@ def _field_shift(contact: bool) -> list[str]:
 def _stress_of_particle(dim: int, stress: tuple | None) -> list[str]:
     """sig{a}{b}, the in-plane entries of sigma_p: read from the stored stress, or, with `stress`
     (a material's name, lines and number of parameters: solver/step/fused.py `forms_stress`)
-    and the compile-time `inline`, formed from F_p by the material's lines, which see f{a}{b}
-    (F_p), fj (det F_p, as solver/kernels.py's `determinant`) and q0, q1, ... (its parameters)."""
+    and the compile-time `inline`, formed by the material's lines, which see f{a}{b} (F_p), fj
+    (det F_p, as solver/kernels.py's `determinant`), l{a}{b} (L_p), vol_p and vol0_p (V_p, V0_p)
+    and q0, q1, ... (its parameters). What a model's lines do not use, the compiler drops."""
     stored = _tensor("sig{a}{b} = stress[p, {a}, {b}]", dim)
     if stress is None:
         return stored
-    return ["if inline:   # the material's stress pass was put off: sigma_p from F_p, as it computes it",
+    return ["if inline:   # the material's stress pass was put off: sigma_p as it computes it",
             *_indent(_tensor("f{a}{b} = F[p, {a}, {b}]", dim), 1),
             f"    fj = {_determinant(list(range(dim)), list(range(dim)), 'f')}",
+            *_indent(_tensor("l{a}{b} = L[p, {a}, {b}]", dim), 1),
+            "    vol_p, vol0_p = volume[p], volume0[p]",
             *_indent(list(stress[1]), 1),
             "else:",
             *_indent(stored, 1)]
@@ -289,8 +303,8 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
 
 def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
     return _shell(
-        "p2g(variant, x, v, C, mass, volume, stress, F, material, acc, frame, d_inv, grid_mass, grid_mom,\n"
-        "        grid_force, copies_mass, copies_mom, copies_force, bad, dt"
+        "p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,\n"
+        "        grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad, dt"
         + (",\n        capacity, T, heat_flux, heat, copies_heat" if thermal else "")
         + (",\n        body, field_of_body, n_nodes, presence, gradient, copies_presence, copies_gradient"
            if contact else "") + ")",
@@ -300,8 +314,8 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[s
         "    added into (mv)_I instead (grid_force untouched).\n\n"
         "    variant: (support, affine, loaded, mls, fold, inline) constants; frame: (lower, h, inv_h,\n"
         "    cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"
-        "    the other threads. `inline`: sigma_p is formed from F and the material's parameters\n"
-        "    `material` (where the module has a material's lines), not read from `stress`."
+        "    the other threads. `inline`: sigma_p is formed from F, L, V, V0 and the material's\n"
+        "    parameters `material` (where the module has a material's lines), not read from `stress`."
         + ("\n\n    Conduction: heat (n, 3), zeroed here, gets C_I, (C T)_I and Q_I^int from c_p, T_p, q_p."
            if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes;\n"
@@ -309,7 +323,7 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[s
         ["support, affine_, loaded_, mls_, fold_, inline_ = variant",
          *([f"{', '.join(f'q{k}' for k in range(stress[2]))}{',' if stress[2] == 1 else ''} = "
             + ", ".join(f"material[{k}]" for k in range(stress[2]))] if stress else []),
-         "lower, h, inv_h, cells, strides, offset = frame",
+         *_frame(dim),
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
          "threads = copies_mass.shape[0] + 1",
          "shared_acc = acc.shape[0] == 1"],
@@ -354,7 +368,7 @@ def _g2p_gather(dim: int, thermal: bool) -> list[str]:
         "    if blend:",
         *_indent(_each_line("dv{c} += w * (v{c} - v_old[node, {a}])", dim), 2),
         "if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)",
-        "    dx = (i - fx) * h[0]",
+        "    dx = (i - fx) * h0",
         *[f"    b{a}{b} += v{AXES[a]} * w * d{AXES[b]}" for a in range(dim) for b in range(dim)],
         "if mode != REMAP and not mls:",
         *_indent(_gradient(dim), 1),
@@ -386,7 +400,7 @@ def _g2p_remap(dim: int, thermal: bool, contact: bool) -> list[str]:
         f"mw = m * (wx[i] * {_outer(dim)})",
         f"{_each('p{c}', dim)} = {_each('v[p, {a}]', dim)}",
         "if affine:",
-        "    dx = (i - fx) * h[0]",
+        "    dx = (i - fx) * h0",
         *[f"    p{AXES[a]} += {_each(f'C[p, {a}, {{a}}] * d{{c}}', dim, ' + ')}" for a in range(dim)],
         *[_scatter("gp", f"node, {a}", "+=", f"mw * p{AXES[a]}") for a in range(dim)],
         *([_scatter("tr", "node", "+=", f"(wx[i] * {_outer(dim)}) * mct")] if thermal else []),
@@ -483,7 +497,7 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes."
            if contact else ""),
         ["support, mode_, affine_, blend_, mls_, l_is_c_ = variant",
-         "lower, h, inv_h, cells, strides, offset = frame",
+         *_frame(dim),
          "threads = copies_mom.shape[0] + 1",
          "remaps = mode_.ndim - 1 == REMAP",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"],

@@ -26,12 +26,15 @@ def _folders(kind: str) -> list[Path]:
     return [cache / "mpm-solver" / kind, temporary / kind]
 
 
+def _name(stem: str, text: str) -> str:
+    return f"{stem}_{hashlib.sha256(text.encode()).hexdigest()[:16]}"
+
+
 def write(kind: str, stem: str, text: str) -> Path:
     """The file of `text` in the `kind` folder, (re)written only when its text changed.
     Written to a temporary file and renamed: processes starting together each see a whole file."""
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
     for folder in _folders(kind):
-        path = folder / f"{stem}_{digest}.py"
+        path = folder / f"{_name(stem, text)}.py"
         try:
             if path.is_file() and path.read_text() == text:
                 return path
@@ -46,8 +49,9 @@ def write(kind: str, stem: str, text: str) -> Path:
 
 
 def load(kind: str, stem: str, text: str) -> ModuleType:
-    """The module `solver._generated.<stem>` of `text`, written (see `write`) and imported once."""
-    name = f"solver._generated.{stem}"
+    """The module `solver._generated.<stem>_<digest>` of `text`, written (see `write`) and imported
+    once: two texts of one stem (a material's lines with other constants) are two modules."""
+    name = f"solver._generated.{_name(stem, text)}"
     if name in sys.modules:
         return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, write(kind, stem, text))

@@ -168,6 +168,8 @@ class ExplicitMPM:
     def wave_speed(self) -> float:
         """The fastest material wave speed now: it follows the state (a gas's sound speed,
         an EOS stiffening under compression)."""
+        if any(getattr(m, "stress_sets_wave_speed", False) for m, _ in self.materials):
+            self.particles.stress   # (so that a stress update put off runs: Particles.defer)
         return max((m.wave_speed for m, _ in self.materials), default=0.0)
 
     def stable_time_step(self, cfl: float) -> float:

@@ -88,12 +88,17 @@ class FusedPhases(Phases):
                 and not sim.hooks.after_forces and not sim.hooks.before_update)
 
     def forms_stress(self) -> bool:
-        """Whether P2G forms sigma_p from F_p, so that the stress pass can wait until something
+        """Whether P2G forms sigma_p itself, so that the stress pass can wait until something
         reads the stress (Particles.defer): for a scene of one material whose stress is a
-        function of F_p alone (a model with `stress_lines`: neo-Hookean), when no hook changes
-        the stress after the update (thermal expansion, F-bar). The stress the pass would store
-        is used to the bit, one pass over the particles and the stress's writes and reads less."""
-        return self._stress_model is not None and not self.sim.hooks.after_stress
+        function of what P2G can read (a model with `stress_lines`: neo-Hookean from F_p, the
+        fluid from L_p and V_p / V0_p), when no hook changes the stress after the update (thermal
+        expansion, F-bar), and, for a model whose wave speed comes with its stress update (the
+        fluid), at a fixed time step: the CFL step would run the pass at every step anyway. The
+        stress the pass would store is used to the bit, one pass over the particles and the
+        stress's writes and reads less."""
+        model = self._stress_model
+        return (model is not None and not self.sim.hooks.after_stress
+                and (self.sim.scene.time.dt is not None or not getattr(model, "stress_sets_wave_speed", False)))
 
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
@@ -101,9 +106,11 @@ class FusedPhases(Phases):
         # inline only while the update is put off: a stress stored since (read, or set by a
         # checkpoint or an initial stress) is the state, and is read
         variant = self._p2g_variants[self.folds_force(), p.pending("stress")]
-        self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stored("stress"), p.F,
-                          self._stress_parameters, acc, self._frame, self._d_inv, g.mass, g.momentum, g.force,
-                          c.mass, c.momentum, c.force, bad, self.dt, *self._heat_p2g(), *self._contact_p2g())
+        # (L_p put off is C_p: `_g2p`)
+        L = self._affine_matrix if p.pending("L") else p.stored("L")
+        self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stored("stress"), p.F, L,
+                          p.volume0, self._stress_parameters, acc, self._frame, self._d_inv, g.mass, g.momentum,
+                          g.force, c.mass, c.momentum, c.force, bad, self.dt, *self._heat_p2g(), *self._contact_p2g())
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
@@ -188,7 +195,7 @@ class FusedPhases(Phases):
 
 
 def _stress_model(sim):
-    """The scene's one material where its stress is a function of F_p alone (`stress_lines`)."""
+    """The scene's one material where P2G can form its stress (`stress_lines`)."""
     models = {id(model): model for model, _ in sim.materials}
     if len(sim.scene.materials) != 1 or len(models) != 1:
         return None

@@ -293,19 +293,27 @@ def test_a_scene_without_contact_loads_the_kernels_of_a_template_without_contact
     assert sim.phases._kernels is fused.kernels(2, contact=True) and sim.stencil is None
 
 
-# -- the stress formed inside P2G (a material whose stress is a function of F alone) ----------
+# -- the stress formed inside P2G (a material whose stress is a function of what P2G reads) -------
 
 NEO_HOOKEAN = {"model": "neo_hookean", "density": 1000, "youngs_modulus": 1e4, "poisson_ratio": 0.3}
+# the Tait fluid with pow(), a viscous deviator and a tension cut-off; and mpm88's (gamma = 1)
+FLUID = {"model": "fluid", "density": 1000, "bulk_modulus": 1e4, "gamma": 7.0, "viscosity": 5.0,
+         "tension_cutoff": 50.0}
+LINEAR_FLUID = {"model": "fluid", "density": 1000, "bulk_modulus": 1e4, "gamma": 1.0}
 
 
-@pytest.mark.parametrize("dimension,method,threads", [
-    (2, "usl-quadratic-mls", 1), (3, "usl-quadratic-mls", 2), (2, "musl-quadratic-apic", 2), (2, "usl-linear-pic", 1)])
-def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(dimension, method, threads):
-    """A neo-Hookean scene's fused P2G forms sigma_p from F_p and the stress pass is put off
-    (Particles.defer); with MLS's USL gather L_p (= C_p) is not written either. The same
-    operations in the same order: the state is that of the step that stores both, to the bit."""
+@pytest.mark.parametrize("material,dimension,method,threads", [
+    (NEO_HOOKEAN, 2, "usl-quadratic-mls", 1), (NEO_HOOKEAN, 3, "usl-quadratic-mls", 2),
+    (NEO_HOOKEAN, 2, "musl-quadratic-apic", 2), (NEO_HOOKEAN, 2, "usl-linear-pic", 1),
+    (FLUID, 2, "usl-quadratic-mls", 2), (FLUID, 3, "usl-quadratic-mls", 1), (FLUID, 2, "musl-quadratic-apic", 1),
+    (LINEAR_FLUID, 2, "usl-quadratic-mls", 1), (LINEAR_FLUID, 2, "usl-linear-pic", 2)])
+def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(material, dimension, method, threads):
+    """A neo-Hookean or fluid scene's fused P2G forms sigma_p (from F_p; from L_p and V_p / V0_p)
+    and the stress pass is put off (Particles.defer); with MLS's USL gather L_p (= C_p) is not
+    written either. The same operations in the same order: the state is that of the step that
+    stores both, to the bit."""
     scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
-    scene["materials"]["m"] = NEO_HOOKEAN
+    scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS[method], "parallel": {"threads": threads}})
     formed, stored = ExplicitMPM(scene), ExplicitMPM(scene)
     assert formed.phases.forms_stress()
@@ -316,6 +324,8 @@ def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(dimension, m
     a, b = formed.particles, stored.particles
     assert a.pending("stress") and not b.pending("stress")
     assert a.pending("L") is (method == "usl-quadratic-mls") and not b.pending("L")
+    if material["model"] == "fluid":   # its sound speed comes with the update: reading it runs the update
+        assert formed.wave_speed == stored.wave_speed and not a.pending("stress")
     for name in ("x", "v", "F", "L", "stress", "volume"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert not a.pending("stress") and not a.pending("L")
@@ -325,6 +335,7 @@ def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(dimension, m
     {"materials": {"m": NEO_HOOKEAN, "n": SCENE_2D["materials"]["m"]}},          # two materials
     {"materials": {"m": SCENE_2D["materials"]["m"]}},                           # a rate (hypoelastic) model
     {"method": {**METHODS["usl-quadratic-mls"], "fbar": True}},                 # a hook after the stress update
+    {"materials": {"m": FLUID}, "time": {"end": 1.0, "cfl": 0.3}},              # a wave speed the CFL step reads
 ])
 def test_the_stress_pass_runs_where_p2g_cannot_form_the_stress(extra):
     scene = copy.deepcopy(SCENE_2D)

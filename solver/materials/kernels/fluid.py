@@ -88,9 +88,30 @@ class Fluid:
         self.min_pressure = -config.tension_cutoff if config.tension_cutoff is not None else -math.inf
         self.wave_speed = config.dilatational_wave_speed()
 
+    stress_sets_wave_speed = True   # (a stress update put off leaves the last one's: solver/step/fused.py)
+
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         self.wave_speed = _update(particles.L[sl], particles.volume[sl], particles.volume0[sl], particles.stress[sl],
                                   self.density, self.K, self.gamma, self.mu, self.min_pressure)
+
+    def stress_lines(self, dim: int) -> tuple[str, ...]:
+        """The in-plane stress as the fused P2G forms it from L_p and V0_p / V_p (solver/fused_template.py
+        `_stress_of_particle`; q0..q3 are K, mu, the pressure floor and gamma): `_update_one`'s
+        operations in its order, so the same bits as the stored stress. gamma = 1 is written in."""
+        lines = ["fl_ratio = vol0_p / vol_p",
+                 "fl_stiff = fl_ratio" if self.gamma == 1.0 else "fl_stiff = fl_ratio**q3",
+                 "fl_pressure = max(q0 * (fl_stiff - 1.0), q2)",
+                 "fl_tr = " + " + ".join(["0.0"] + [f"l{a}{a}" for a in range(dim)])]
+        for a in range(dim):
+            for b in range(dim):
+                d = f"0.5 * (l{a}{b} + l{b}{a})"
+                lines.append(f"sig{a}{b} = 2.0 * q1 * ({d} - fl_tr / 3.0) - fl_pressure" if a == b
+                             else f"sig{a}{b} = 2.0 * q1 * ({d})")
+        return tuple(lines)
+
+    def stress_parameters(self) -> np.ndarray:
+        """q0..q3 of `stress_lines`."""
+        return np.array([self.K, self.mu, self.min_pressure, self.gamma])
 
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         out = np.empty(sl.stop - sl.start)
