@@ -132,10 +132,12 @@ def _gradient(dim: int) -> list[str]:
     return [f"dwx = gx[i] * {_outer(dim)}"] + [f"dw{AXES[a]} = wx[i] * {_outer(dim, a)}" for a in range(1, dim)]
 
 
-def _stencil(dim: int, body: list[str], gradients: bool, contact: bool) -> list[str]:
+def _stencil(dim: int, body: list[str], gradients: bool, contact: bool, row_start: tuple = (),
+             row_end: tuple = ()) -> list[str]:
     """The loops over the S^dim nodes of a particle's stencil, outer axis first, around
     `body` (which sees node, d{c} of the outer axes and their products, `_outer`); with
-    `contact` the nodes are those of the particle's body's field (+ shift, `_field_shift`)."""
+    `contact` the nodes are those of the particle's body's field (+ shift, `_field_shift`).
+    A row is the S nodes along x at one (j, k): `row_start` runs before them, `row_end` after."""
     lines, level = [], 0
     for a in range(dim - 1, 0, -1):
         c, i = AXES[a], LOOPS[a]
@@ -143,9 +145,10 @@ def _stencil(dim: int, body: list[str], gradients: bool, contact: bool) -> list[
         level += 1
     row = " + ".join(f"(i{AXES[a]} + {LOOPS[a]}) * stride{a}" for a in range(1, dim))
     lines += _indent([f"row = {row} - offset" + (" + shift" if contact else ""), *_products(dim, gradients),
+                      *row_start,
                       "for i in range(S):",
                       "    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)"], level)
-    return lines + _indent(body, level + 1)
+    return lines + _indent(body, level + 1) + _indent(list(row_end), level)
 
 
 def _shell(signature: str, docstring: str, before: list[str], per_thread: list[str], per_particle: list[str],
@@ -199,7 +202,7 @@ def _p2g_node(dim: int, thermal: bool, contact: bool) -> list[str]:
         *_indent(_gradient(dim), 1),
         f"{_each('p{c}', dim)} = {_each('mv{c}', dim)}",
         "if affine:",
-        *[f"    p{AXES[a]} += {_each(f'mc{a}{{a}} * d{{c}}', dim, ' + ')}" for a in range(dim)],
+        *[f"    p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
         _scatter("gm", "node", "+=", "w * m"),
         *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)],
         "if fold:",
@@ -266,6 +269,13 @@ def _stress_of_particle(dim: int, stress: tuple | None) -> list[str]:
             *_indent(stored, 1)]
 
 
+def _p2g_row(dim: int) -> list[str]:
+    """The particle's affine momentum m v_p + m C_p (x_I - x_p) without its x term, the same
+    for the S nodes of a row (a sum per node fewer: P2G 10 % faster, mpm88)."""
+    return [f"r{c} = mv{c}" + "".join(f" + mc{a}{b} * d{AXES[b]}" for b in range(1, dim))
+            for a, c in enumerate(AXES[:dim])]
+
+
 def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
     mc = [f"mc{a}{b}" for a in range(dim) for b in range(dim)]
     return [
@@ -297,7 +307,8 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
            "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
            f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
         *_field_shift(contact),
-        *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact),
+        *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact,
+                  row_start=_p2g_row(dim)),
     ]
 
 
@@ -358,22 +369,45 @@ def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
 # -- G2P ---------------------------------------------------------------------------
 
 def _g2p_gather(dim: int, thermal: bool) -> list[str]:
-    """What one node gives one particle: v_pic, the FLIP increment, B_p, L_p (and with
-    `thermal` the conduction's gathers: `_heat_g2p_gather`)."""
+    """What one node adds to its row's sums (`_g2p_row_end`): the x weights times the node's
+    velocity (s{c}), times x_I - x_p as well (t{c}, `wdx`), the x gradients times it (u{c}),
+    the x weights times its FLIP increment (e{c}); with `thermal` the conduction's gathers
+    (`_heat_g2p_gather`), which take the node's whole weight w."""
     return [
-        f"w = wx[i] * {_outer(dim)}",
         f"{_each('v{c}', dim)} = {_each('v_new[node, {a}]', dim)}",
-        "if mode != KINEMATICS:",
-        *_indent(_each_line("vp{c} += w * v{c}", dim), 1),
-        "    if blend:",
-        *_indent(_each_line("dv{c} += w * (v{c} - v_old[node, {a}])", dim), 2),
+        *_each_line("s{c} += wx[i] * v{c}", dim),
         "if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)",
-        "    dx = (i - fx) * h0",
-        *[f"    b{a}{b} += v{AXES[a]} * w * d{AXES[b]}" for a in range(dim) for b in range(dim)],
+        *_indent(_each_line("t{c} += wdx[i] * v{c}", dim), 1),
+        "if mode != KINEMATICS and blend:",
+        *_indent(_each_line("e{c} += wx[i] * (v{c} - v_old[node, {a}])", dim), 1),
         "if mode != REMAP and not mls:",
-        *_indent(_gradient(dim), 1),
-        *[f"    l{a}{b} += v{AXES[a]} * dw{AXES[b]}" for a in range(dim) for b in range(dim)],
-        *(_heat_g2p_gather(dim) if thermal else []),
+        *_indent(_each_line("u{c} += gx[i] * v{c}", dim), 1),
+        *([f"w = wx[i] * {_outer(dim)}", "dx = (i - fx) * h0",
+           "if mode == KINEMATICS and not mls:", *_indent(_gradient(dim), 1), *_heat_g2p_gather(dim)]
+          if thermal else []),
+    ]
+
+
+def _g2p_row_start(dim: int) -> list[str]:
+    return [_zeros([f"{n}{c}" for n in "stue" for c in AXES[:dim]])]
+
+
+def _g2p_row_end(dim: int) -> list[str]:
+    """The row's sums into the particle's: the weights factor into x and the outer axes (w =
+    wx[i] wo, grad w = (gx[i] wo, wx[i] go1, ...)), so a node's terms are summed along x first
+    and multiplied by the row's outer factor once (G2P 12 % faster, mpm88)."""
+    wo = _outer(dim)
+    return [
+        "if mode != KINEMATICS:",
+        *_indent(_each_line(f"vp{{c}} += {wo} * s{{c}}", dim), 1),
+        "    if blend:",
+        *_indent(_each_line(f"dv{{c}} += {wo} * e{{c}}", dim), 2),
+        "if affine and (mls or mode != KINEMATICS):",
+        *[f"    b{a}0 += {wo} * t{AXES[a]}" for a in range(dim)],
+        *[f"    b{a}{b} += ({wo} * d{AXES[b]}) * s{AXES[a]}" for a in range(dim) for b in range(1, dim)],
+        "if mode != REMAP and not mls:",
+        *[f"    l{a}0 += {wo} * u{AXES[a]}" for a in range(dim)],
+        *[f"    l{a}{b} += {_outer(dim, b)} * s{AXES[a]}" for a in range(dim) for b in range(1, dim)],
     ]
 
 
@@ -449,7 +483,9 @@ def _g2p_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
         _zeros([m.format("l") for m in matrix]),
         *([_zeros(["dT"] + [f"tq{c}" for c in AXES[:dim]]), "kp = conductivity[p]"] if thermal else []),
         *_field_shift(contact),
-        *_stencil(dim, _g2p_gather(dim, thermal), gradients=True, contact=contact),
+        f"wdx = {_each('wx[{a}] * (({a} - fx) * h0)', 3)}   # (wx has 3 entries for every support)",
+        *_stencil(dim, _g2p_gather(dim, thermal), gradients=True, contact=contact,
+                  row_start=_g2p_row_start(dim), row_end=_g2p_row_end(dim)),
         "if mode != KINEMATICS:",
         "    if blend:",
         *_indent(_each_line("v[p, {a}] = flip * (v[p, {a}] + dv{c}) + (1.0 - flip) * vp{c}", dim), 2),
