@@ -207,10 +207,16 @@ def _p2g_node(dim: int, thermal: bool, contact: bool) -> list[str]:
         *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)],
         "if fold:",
         "    pass",
-        "elif loaded:",
+        "elif mls and loaded:",
         *[f"    {_scatter('gf', f'node, {a}', '+=', f'w * mb{AXES[a]} - {force(a)}')}" for a in range(dim)],
-        "else:",
+        "elif mls:",
         *[f"    {_scatter('gf', f'node, {a}', '-=', force(a).replace(' - ', ' + '))}" for a in range(dim)],
+        "elif loaded:   # w mb - sigma grad w, its row factors taken once (`_p2g_row`)",
+        *[f"    {_scatter('gf', f'node, {a}', '+=', f'wx[i] * fw{AXES[a]} - gx[i] * fg{AXES[a]}')}"
+          for a in range(dim)],
+        "else:",
+        *[f"    {_scatter('gf', f'node, {a}', '-=', f'wx[i] * fo{AXES[a]} + gx[i] * fg{AXES[a]}')}"
+          for a in range(dim)],
         *(_heat_p2g_node(dim) if thermal else []),
         *(_contact_p2g_node(dim) if contact else []),
     ]
@@ -270,10 +276,18 @@ def _stress_of_particle(dim: int, stress: tuple | None) -> list[str]:
 
 
 def _p2g_row(dim: int) -> list[str]:
-    """The particle's affine momentum m v_p + m C_p (x_I - x_p) without its x term, the same
-    for the S nodes of a row (a product and a sum per node fewer: P2G 1.05-1.12x with MLS)."""
-    return [f"r{c} = mv{c}" + "".join(f" + mc{a}{b} * d{AXES[b]}" for b in range(1, dim))
-            for a, c in enumerate(AXES[:dim])]
+    """What is the same for the S nodes of a row: the particle's affine momentum m v_p + m C_p
+    (x_I - x_p) without its x term (a product and a sum per node fewer: P2G 1.05-1.12x with
+    MLS); and, without MLS, the force's factors. With grad w = (gx[i] wo, wx[i] go1, ...) the
+    node's w m b_p - V sigma_p grad w is wx[i] fw - gx[i] fg: fg = V sigma_a0 wo, fo = V
+    (sigma_a1 go1 + ...), fw = m b_a wo - fo."""
+    momentum = [f"r{c} = mv{c}" + "".join(f" + mc{a}{b} * d{AXES[b]}" for b in range(1, dim))
+                for a, c in enumerate(AXES[:dim])]
+    force = [line for a, c in enumerate(AXES[:dim]) for line in (
+        f"fg{c} = s{a}0 * {_outer(dim)}",
+        f"fo{c} = " + " + ".join(f"s{a}{b} * {_outer(dim, b)}" for b in range(1, dim)),
+        f"fw{c} = mb{c} * {_outer(dim)} - fo{c}")]
+    return momentum + force
 
 
 def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
