@@ -57,14 +57,16 @@ USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docs
 
 
 @functools.cache
-def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None):
+def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
+            update: tuple | None = None):
     """The module of the fused kernels for `dim` dimensions: `p2g` and `g2p`
     (generated from solver/fused_template.py, see there); with `thermal` the kernels that
     carry heat conduction as well, with `contact` those of a velocity field per body, with
     `stress` (a material's name, lines and number of parameters) a P2G that can form the
-    stress from F_p (separate modules: scenes without them keep theirs)."""
+    stress from F_p, with `update` (the same) a G2P that can update the stress from L_p
+    (separate modules: scenes without them keep theirs)."""
     from solver import fused_template
-    return fused_template.load(dim, thermal, contact, stress)
+    return fused_template.load(dim, thermal, contact, stress, update)
 
 
 _CONSTANTS = [np.empty((0,) * n) for n in range(1, 5)]

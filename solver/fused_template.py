@@ -38,7 +38,9 @@ what P2G reads, F_p for neo-Hookean, L_p and V_p / V0_p for the fluid: solver/st
 `forms_stress`) and the compile-time `inline`, P2G forms sigma_p with them, first in the
 particle's body (a log() then spills little), instead of reading the stored stress; the
 module is fused_{dim}d_<model>_<digest of its text>. With the compile-time `l_is_c`
-(MLS, USL) G2P does not write L_p, which is C_p.
+(MLS, USL) G2P does not write L_p, which is C_p. With a rate model's update lines
+(`source(..., update=)`: linear elasticity, solver/step/fused.py `updates_stress`) and the
+compile-time `updates`, the G2P pass that forms L_p updates the stored stress with them.
 
 The particle index p and the node index are unsigned (np.uint64): numba wraps a
 negative signed index around (x[-1] is the last row), so every x[p, a], gp[node, a]
@@ -346,8 +348,7 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[s
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes;\n"
            "    presence gets V_p w and gradient m_p grad w per field (zeroed by the caller)." if contact else ""),
         ["support, affine_, loaded_, mls_, fold_, inline_ = variant",
-         *([f"{', '.join(f'q{k}' for k in range(stress[2]))}{',' if stress[2] == 1 else ''} = "
-            + ", ".join(f"material[{k}]" for k in range(stress[2]))] if stress else []),
+         *_parameters(stress),
          *_frame(dim),
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}",
          "threads = copies_mass.shape[0] + 1",
@@ -364,6 +365,14 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[s
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
          "else:",
          *_p2g_reduce(thermal, contact)])
+
+
+def _parameters(lines: tuple | None) -> list[str]:
+    """q0, q1, ... = the material's parameters (`material`), read once before the threads' loop."""
+    if lines is None:
+        return []
+    names = [f"q{k}" for k in range(lines[2])]
+    return [f"{', '.join(names)}{',' if len(names) == 1 else ''} = " + ", ".join(f"material[{k}]" for k in range(lines[2]))]
 
 
 def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
@@ -446,10 +455,10 @@ def _g2p_remap(dim: int, thermal: bool, contact: bool) -> list[str]:
     `thermal`: T_p += dT_p, and w m c T_p into `remapped`, Algorithm 8 lines 12-13)."""
     node = [
         f"mw = m * (wx[i] * {_outer(dim)})",
-        f"{_each('p{c}', dim)} = {_each('v[p, {a}]', dim)}",
+        f"{_each('p{c}', dim)} = {_each('vr{c}', dim)}",
         "if affine:",
         "    dx = (i - fx) * h0",
-        *[f"    p{AXES[a]} += {_each(f'C[p, {a}, {{a}}] * d{{c}}', dim, ' + ')}" for a in range(dim)],
+        *[f"    p{AXES[a]} += {_each(f'cr{a}{{a}} * d{{c}}', dim, ' + ')}" for a in range(dim)],
         *[_scatter("gp", f"node, {a}", "+=", f"mw * p{AXES[a]}") for a in range(dim)],
         *([_scatter("tr", "node", "+=", f"(wx[i] * {_outer(dim)}) * mct")] if thermal else []),
     ]
@@ -461,6 +470,11 @@ def _g2p_remap(dim: int, thermal: bool, contact: bool) -> list[str]:
         "if mode == REMAP:",
         f"    {_each('rate[p, {a}]', dim)} = {_each('vp{c}', dim)}",
         "    m = mass[p]",
+        # v_p and C_p as scalars: read in the node loop, they were loaded again after every
+        # scatter (numba cannot tell v and C from the nodal array written)
+        f"    {_each('vr{c}', dim)} = {_each('v[p, {a}]', dim)}",
+        "    if affine:",
+        *_indent(_tensor("cr{a}{b} = C[p, {a}, {b}]", dim), 2),
         *(heat if thermal else []),
         *_indent(_stencil(dim, node, gradients=False, contact=contact), 1),
         "    continue",
@@ -488,7 +502,18 @@ def _determinant(rows: list[int], columns: list[int], name: str = "n") -> str:
     return text
 
 
-def _g2p_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
+def _stress_update(update: tuple | None) -> list[str]:
+    """With `update` (a material's name, lines and number of parameters: solver/step/fused.py
+    `updates_stress`) and the compile-time `updates`, the material's stress update from the L_p
+    just formed, in place: its lines see l{a}{b}, dt, q0, q1, ... (its parameters) and add into
+    stress[p, a, b] as its own pass would, in its order (the same bits)."""
+    if update is None:
+        return []
+    return ["if updates:   # the material's pass, put here: its stress read and written once, L_p not read back",
+            *_indent(list(update[1]), 1)]
+
+
+def _g2p_particle(dim: int, thermal: bool, contact: bool, update: tuple | None) -> list[str]:
     matrix = [f"{{}}{a}{b}" for a in range(dim) for b in range(dim)]
     return [
         *_axes(dim, ok=False),
@@ -518,6 +543,7 @@ def _g2p_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
         *_indent(_tensor("l{a}{b} = b{a}{b} * d_inv{b}", dim), 1),
         "if not l_is_c:   # (else L_p is left to the particles' deferred update, solver/step/fused.py)",
         *_indent(_tensor("L[p, {a}, {b}] = l{a}{b}", dim), 1),
+        *_stress_update(update),
         *_deformation_gradient(dim),
         f"J = {_determinant(list(range(dim)), list(range(dim)))}",
         "volume[p] = J * volume0[p]",
@@ -526,10 +552,10 @@ def _g2p_particle(dim: int, thermal: bool, contact: bool) -> list[str]:
     ]
 
 
-def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
+def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None) -> list[str]:
     return _shell(
         "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
-        "        flip, dt, d_inv, copies_mom, bad"
+        "        flip, dt, d_inv, copies_mom, stress, material, bad"
         + (",\n        capacity, T, conductivity, heat_flux, T_change, T_grid, remapped, copies_remapped"
            if thermal else "")
         + (",\n        body, field_of_body, n_nodes" if contact else "") + ")",
@@ -538,25 +564,27 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
         "    m w (v_p + C_p (x_I - x_p)) added to grid_mom (zeroed by the caller). KINEMATICS:\n"
         "    L_p, F_p, V_p from v_new (the remapped velocity), then x_p += dt rate_p.\n"
         "    bad[t]: first particle of block t whose J = det F is not positive.\n\n"
-        "    variant: (support, mode, affine, blend, mls, l_is_c) constants; frame: (lower, h, inv_h,\n"
-        "    cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS). `l_is_c` (MLS, USL): L_p,\n"
-        "    which is C_p, is not written."
+        "    variant: (support, mode, affine, blend, mls, l_is_c, updates) constants; frame: (lower, h,\n"
+        "    inv_h, cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS). `l_is_c` (MLS, USL): L_p,\n"
+        "    which is C_p, is not written. `updates` (USL, KINEMATICS; where the module has a material's\n"
+        "    update lines): `stress` is updated from L_p with the parameters `material`."
         + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w T_change (T~_I - T_I) and sum w m c T_p into\n"
            "    `remapped` (zeroed here); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
            "    then being the remapped T_I^{t+dt}." if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes."
            if contact else ""),
-        ["support, mode_, affine_, blend_, mls_, l_is_c_ = variant",
+        ["support, mode_, affine_, blend_, mls_, l_is_c_, updates_ = variant",
+         *_parameters(update),
          *_frame(dim),
          "threads = copies_mom.shape[0] + 1",
          "remaps = mode_.ndim - 1 == REMAP",
          f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"],
         ["S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2"
          "   # compile-time constants",
-         "mode, l_is_c = mode_.ndim - 1, l_is_c_.ndim == 2",
+         "mode, l_is_c, updates = mode_.ndim - 1, l_is_c_.ndim == 2, updates_.ndim == 2",
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
          *(["tr = own_zeroed(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
-        _g2p_particle(dim, thermal, contact),
+        _g2p_particle(dim, thermal, contact, update),
         ["if remaps:", "    _reduce_mass_momentum(remapped, grid_mom, copies_remapped, copies_mom)"]
         if thermal else
         ["if remaps and copies_mom.shape[0] > 0:", "    add_node_copies(grid_mom, copies_mom)"])
@@ -564,30 +592,36 @@ def _g2p(dim: int, thermal: bool, contact: bool) -> list[str]:
 
 # -- the generated module ------------------------------------------------------------
 
-def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None) -> str:
+def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
+           update: tuple | None = None) -> str:
     """The text of the module of the fused kernels for `dim` (2 or 3) dimensions; with
     `thermal`, the kernels that carry conduction too, with `contact` those that step a
     velocity field per body (a scene without them never loads those: its module's text, and
     so its kernels, are those of a template without heat or contact); with `stress`, a
     material's (name, lines, number of parameters), a P2G that can form sigma_p from F_p
-    (`_stress_of_particle`)."""
+    (`_stress_of_particle`); with `update`, a material's (name, lines, number of parameters), a G2P
+    that can update the stress from L_p (`_stress_update`)."""
     if thermal and contact:
         raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
     header = (HEADER.format(dim=dim) + ("\nimport math" if stress else "") + (THERMAL_IMPORTS if thermal else "")
               + ("\nfrom solver.fused import _reduce_with" if contact else ""))
-    return "\n".join([header, *_p2g(dim, thermal, contact, stress), *_g2p(dim, thermal, contact)]) + "\n"
+    return "\n".join([header, *_p2g(dim, thermal, contact, stress), *_g2p(dim, thermal, contact, update)]) + "\n"
 
 
-def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> str:
+def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None = None) -> str:
     return (f"fused_{dim}d" + ("_thermal" if thermal else "") + ("_contact" if contact else "")
-            + (f"_{stress[0]}" if stress else ""))
+            + (f"_{stress[0]}" if stress else "") + (f"_{update[0]}" if update else ""))
 
 
-def write(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None) -> Path:
+def write(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
+          update: tuple | None = None) -> Path:
     """The generated file for `dim`, (re)written only when its text changed (solver/generated.py)."""
-    return generated.write("fused", _stem(dim, thermal, contact, stress), source(dim, thermal, contact, stress))
+    return generated.write("fused", _stem(dim, thermal, contact, stress, update),
+                           source(dim, thermal, contact, stress, update))
 
 
-def load(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None):
+def load(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
+         update: tuple | None = None):
     """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
-    return generated.load("fused", _stem(dim, thermal, contact, stress), source(dim, thermal, contact, stress))
+    return generated.load("fused", _stem(dim, thermal, contact, stress, update),
+                          source(dim, thermal, contact, stress, update))

@@ -38,11 +38,10 @@ class FusedPhases(Phases):
         method = sim.scene.method
         self._support = fused.support_of(method.shape_function)
         model = self._stress_model = _stress_model(sim)
-        stress = None if model is None else (   # (the scene's one material names the generated module)
-            next(iter(sim.scene.materials.values())).model, model.stress_lines(sim.scene.dimension),
-            len(model.stress_parameters()))
         self._kernels = fused.kernels(sim.scene.dimension, thermal=sim.conduction is not None,
-                                      contact=sim.field_contact is not None, stress=stress)
+                                      contact=sim.field_contact is not None,
+                                      stress=_material_lines(sim, model, "stress_lines"),
+                                      update=_material_lines(sim, model, "stress_update_lines"))
         apic_d = shape.REGISTRY[method.shape_function].apic_d
         # APIC's (and MLS's) D_p^-1 per axis (unused without them); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
@@ -67,9 +66,10 @@ class FusedPhases(Phases):
                               for fold in (False, True) for inline in (False, True)}
         model = self._stress_model
         self._stress_parameters = model.stress_parameters() if model is not None else np.zeros(0)
-        self._g2p_variants = {(mode, l_is_c): (self._support, fused.constant(mode), affine, blend, mls,
-                                               fused.constant(l_is_c))
-                              for mode in (fused.USL, fused.REMAP, fused.KINEMATICS) for l_is_c in (False, True)}
+        self._g2p_variants = {(mode, l_is_c, updates): (self._support, fused.constant(mode), affine, blend, mls,
+                                                        fused.constant(l_is_c), fused.constant(updates))
+                              for mode in (fused.USL, fused.REMAP, fused.KINEMATICS) for l_is_c in (False, True)
+                              for updates in (False, True)}
 
     def weights(self) -> None:
         """Nothing to store: every kernel evaluates the weights it needs."""
@@ -97,8 +97,21 @@ class FusedPhases(Phases):
         stress the pass would store is used to the bit, one pass over the particles and the
         stress's writes and reads less."""
         model = self._stress_model
-        return (model is not None and not self.sim.hooks.after_stress
+        return (has_lines(model, "stress_lines") and not self.sim.hooks.after_stress
                 and (self.sim.scene.time.dt is not None or not getattr(model, "stress_sets_wave_speed", False)))
+
+    def updates_stress(self) -> bool:
+        """Whether G2P updates sigma_p from the L_p it has just formed (USL's pass, MUSL's
+        KINEMATICS pass), so that the stress pass has nothing left to do: for a scene of one
+        material whose update is a function of L_p and the stress (a model with
+        `stress_update_lines`: linear elasticity), when no hook runs between the kinematics and
+        the stress update or after it (after_kinematics, after_stress; under USL after_g2p too,
+        which runs after the same pass). The same bits as the pass; the stress read and written
+        in the pass that has L_p, instead of L_p and the stress read again by a pass of their own
+        (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle)."""
+        hooks = self.sim.hooks
+        return (has_lines(self._stress_model, "stress_update_lines") and not hooks.after_kinematics
+                and not hooks.after_stress and (self.sim.scene.method.scheme == "musl" or not hooks.after_g2p))
 
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
@@ -148,10 +161,11 @@ class FusedPhases(Phases):
         # MLS's USL gather: L_p = B_p D_p^-1 is C_p to the bit, copied only when something reads it
         # (where the stress is formed in P2G, no material reads it at each step)
         l_is_c = mode == fused.USL and sim.affine is not None and sim.affine.mls and self.forms_stress()
-        self._kernels.g2p(self._g2p_variants[mode, l_is_c], p.x, p.v, self._affine_matrix, p.mass, p.stored("L"),
-                          p.F, p.volume, p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum,
-                          sim.flip_ratio, dt, self._d_inv, sim.copies.momentum, bad, *self._heat_g2p(mode),
-                          *self._contact_g2p())
+        updates = mode != fused.REMAP and self.updates_stress()
+        self._kernels.g2p(self._g2p_variants[mode, l_is_c, updates], p.x, p.v, self._affine_matrix, p.mass,
+                          p.stored("L"), p.F, p.volume, p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum,
+                          sim.flip_ratio, dt, self._d_inv, sim.copies.momentum, p.stored("stress"),
+                          self._stress_parameters, bad, *self._heat_g2p(mode), *self._contact_g2p())
         if l_is_c:
             p.defer("L", lambda: np.copyto(p.stored("L"), self._affine_matrix))
         sim.check_inversion(first_of(bad))
@@ -195,9 +209,29 @@ class FusedPhases(Phases):
 
 
 def _stress_model(sim):
-    """The scene's one material where P2G can form its stress (`stress_lines`)."""
+    """The scene's one material where P2G can form its stress (`stress_lines`) or G2P can update
+    it (`stress_update_lines`)."""
     models = {id(model): model for model, _ in sim.materials}
     if len(sim.scene.materials) != 1 or len(models) != 1:
         return None
     model = next(iter(models.values()))
-    return model if hasattr(model, "stress_lines") else None
+    return model if has_lines(model, "stress_lines") or has_lines(model, "stress_update_lines") else None
+
+
+def has_lines(model, kind: str) -> bool:
+    """Whether the model's `kind` lines ("stress_lines", "stress_update_lines") are its stress
+    update: the class that gives them is the one that gives `update_stress`. A model that
+    derives from one with lines and updates the stress its own way (J2, Drucker-Prager and
+    Mohr-Coulomb over linear elasticity) inherits lines that are not its update."""
+    def owner(name):
+        return next((c for c in type(model).__mro__ if name in vars(c)), None)
+    return model is not None and owner(kind) is not None and owner(kind) is owner("update_stress")
+
+
+def _material_lines(sim, model, kind: str) -> tuple | None:
+    """(the material's model name, its `kind` lines, its number of parameters) for the generated
+    kernels, where the model has such lines (the scene's one material names the module)."""
+    if not has_lines(model, kind):
+        return None
+    return (next(iter(sim.scene.materials.values())).model, getattr(model, kind)(sim.scene.dimension),
+            len(model.stress_parameters()))

@@ -124,10 +124,13 @@ class Phases:
 
     def stress(self, dt: float) -> None:
         """sigma_p from the materials (line 28); put off (Particles.defer) where the
-        backend's P2G forms it from F_p itself (`forms_stress`)."""
+        backend's P2G forms it from F_p itself (`forms_stress`); nothing where its G2P
+        updated it (`updates_stress`)."""
         sim = self.sim
         if self.forms_stress():
             sim.particles.defer("stress", lambda: self._material_stress(dt))
+            return
+        if self.updates_stress():   # done: G2P updated it from L_p (solver/step/fused.py)
             return
         self._material_stress(dt)
         for hook in sim.hooks.after_stress:
@@ -141,4 +144,8 @@ class Phases:
     def forms_stress(self) -> bool:
         """Whether the next P2G forms sigma_p from F_p, so that the stress update can wait
         until something reads the stress (solver/step/fused.py)."""
+        return False
+
+    def updates_stress(self) -> bool:
+        """Whether the pass that formed L_p has updated sigma_p from it already (solver/step/fused.py)."""
         return False

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,7 +225,8 @@ def test_a_scene_without_heat_loads_the_kernels_of_a_template_without_heat():
         plain, thermal = fused_template.source(dimension), fused_template.source(dimension, thermal=True)
         assert "capacity" not in plain and "heat" not in plain
         assert "heat_flux" in thermal
-    assert ExplicitMPM(load_scene(SCENE_2D)).phases._kernels is fused.kernels(2)
+    loaded = Path(ExplicitMPM(load_scene(SCENE_2D)).phases._kernels.__file__).read_text()
+    assert "capacity" not in loaded and "heat" not in loaded
 
 
 # -- contact with a velocity field per body -----------------------------------------
@@ -302,6 +304,18 @@ FLUID = {"model": "fluid", "density": 1000, "bulk_modulus": 1e4, "gamma": 7.0, "
 LINEAR_FLUID = {"model": "fluid", "density": 1000, "bulk_modulus": 1e4, "gamma": 1.0}
 
 
+def stepped_with_and_without(scene, switch: str) -> tuple:
+    """Two simulations of the scene after STEPS steps: the fused backend's `switch` (a method of
+    FusedPhases that is true for the scene) as it is, and turned off."""
+    on, off = ExplicitMPM(scene), ExplicitMPM(scene)
+    assert getattr(on.phases, switch)()
+    setattr(off.phases, switch, lambda: False)
+    for _ in range(STEPS):
+        on.advance(2e-4)
+        off.advance(2e-4)
+    return on, off
+
+
 @pytest.mark.parametrize("material,dimension,method,threads", [
     (NEO_HOOKEAN, 2, "usl-quadratic-mls", 1), (NEO_HOOKEAN, 3, "usl-quadratic-mls", 2),
     (NEO_HOOKEAN, 2, "musl-quadratic-apic", 2), (NEO_HOOKEAN, 2, "usl-linear-pic", 1),
@@ -315,12 +329,7 @@ def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(material, di
     scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS[method], "parallel": {"threads": threads}})
-    formed, stored = ExplicitMPM(scene), ExplicitMPM(scene)
-    assert formed.phases.forms_stress()
-    stored.phases.forms_stress = lambda: False
-    for _ in range(STEPS):
-        formed.advance(2e-4)
-        stored.advance(2e-4)
+    formed, stored = stepped_with_and_without(scene, "forms_stress")
     a, b = formed.particles, stored.particles
     assert a.pending("stress") and not b.pending("stress")
     assert a.pending("L") is (method == "usl-quadratic-mls") and not b.pending("L")
@@ -348,6 +357,46 @@ def test_the_stress_pass_runs_where_p2g_cannot_form_the_stress(extra):
     sim.advance(2e-4)
     assert not sim.phases.forms_stress()
     assert not sim.particles.pending("stress") and not sim.particles.pending("L")
+
+
+# -- the stress updated inside G2P (a rate model whose update is a function of L_p) ---------------
+
+@pytest.mark.parametrize("dimension,method,threads", [
+    (2, "musl-linear-flip", 1), (3, "musl-linear-flip", 2), (2, "usl-quadratic-apic", 2),
+    (3, "usl-quadratic-mls", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-mls", 1)])
+def test_the_stress_updated_in_g2p_gives_the_stress_pass_bit_for_bit(dimension, method, threads):
+    """A linear elastic scene's fused G2P (USL's pass, MUSL's kinematics pass) updates sigma_p
+    from the L_p it has just formed, and the stress pass does nothing: the same operations in the
+    same order, so the state is that of the step with the pass, to the bit."""
+    method = METHODS.get(method) or {**METHODS["usl-quadratic-mls"], "transfer": "apic"}
+    scene = load_scene({**(SCENE_2D if dimension == 2 else SCENE_3D), "method": method,
+                        "parallel": {"threads": threads}})
+    inside, passed = stepped_with_and_without(scene, "updates_stress")
+    assert np.abs(inside.particles.stress).max() > 1.0   # (the bodies have collided: a stress to compare)
+    for name in ("x", "v", "F", "L", "stress", "volume"):
+        assert np.array_equal(getattr(inside.particles, name), getattr(passed.particles, name)), name
+
+
+@pytest.mark.parametrize("extra,updates", [
+    ({"damping": {"type": "viscous", "coefficient": 5.0}}, False),               # after_g2p, after USL's pass
+    ({"damping": {"type": "viscous", "coefficient": 5.0},
+      "method": METHODS["musl-linear-flip"]}, True),                             # MUSL: before the kinematics
+    ({"method": {**METHODS["usl-linear-pic"], "fbar": True}}, False),           # hooks after the kinematics
+    ({"materials": {"m": SCENE_2D["materials"]["m"], "n": NEO_HOOKEAN}}, False),   # two materials
+    ({"materials": {"m": {**SCENE_2D["materials"]["m"], "model": "j2_plasticity", "yield_stress": 10.0}}},
+     False),                                                                     # a model over linear elasticity
+])
+def test_the_stress_pass_runs_where_g2p_cannot_update_the_stress(extra, updates):
+    scene = copy.deepcopy(SCENE_2D)
+    scene["method"] = METHODS["usl-linear-pic"]
+    scene.update(copy.deepcopy(extra))
+    if "n" in scene["materials"]:
+        scene["bodies"][1]["material"] = "n"
+    sim = ExplicitMPM(load_scene(scene))
+    assert sim.phases.updates_stress() is updates
+    before = sim.particles.stress.copy()
+    sim.advance(2e-4)
+    assert not np.array_equal(sim.particles.stress, before)
 
 
 def test_an_initial_stress_is_read_by_the_first_p2g():

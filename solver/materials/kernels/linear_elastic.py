@@ -59,6 +59,19 @@ class LinearElastic(IsotropicElastic):
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         _update(particles.L[sl], particles.stress[sl], dt, self.lam, self.mu)
 
+    def stress_update_lines(self, dim: int) -> tuple[str, ...]:
+        """This update as the fused G2P runs it, right after it forms L_p (solver/fused_template.py
+        `_stress_update`: l{a}{b} are L_p's entries, q0 and q1 lambda and mu): `_update_one`'s
+        operations in its order, so the same bits as `update_stress`."""
+        trace = " + ".join(["0.0"] + [f"l{a}{a}" for a in range(dim)])
+        return (f"le_tr = ({trace}) * dt",
+                *[f"stress[p, {a}, {a}] += q0 * le_tr" for a in range(3)],
+                *[f"stress[p, {a}, {b}] += q1 * dt * (l{a}{b} + l{b}{a})" for a in range(dim) for b in range(dim)])
+
+    def stress_parameters(self) -> np.ndarray:
+        """q0, q1 of `stress_update_lines`."""
+        return np.array([self.lam, self.mu])
+
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         out = np.empty(sl.stop - sl.start)
         _energy(particles.stress[sl], particles.volume[sl], self.lam, self.mu, out)
