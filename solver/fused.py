@@ -124,16 +124,25 @@ def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
         _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom)
 
 
+@njit(cache=True, inline="always")
+def _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, dim):
+    for t in range(copies_mass.shape[0]):
+        grid_mass[i] += copies_mass[t, i]
+        for a in range(dim):
+            grid_mom[i, a] += copies_mom[t, i, a]
+
+
 @njit(parallel=True, cache=True)
 def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
     """As solver/threads.py's add_copies without the force: one parallel loop over the nodes
-    (two, one per array, were not faster)."""
+    (two, one per array, were not faster), one per dimension (the component loop unrolled)."""
     n, dim = grid_mom.shape
-    for i in prange(n):
-        for t in range(copies_mass.shape[0]):
-            grid_mass[i] += copies_mass[t, i]
-            for a in range(dim):
-                grid_mom[i, a] += copies_mom[t, i, a]
+    if dim == 2:
+        for i in prange(n):
+            _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, 2)
+    else:
+        for i in prange(n):
+            _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, 3)
 
 
 @njit(cache=True)

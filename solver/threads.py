@@ -76,16 +76,29 @@ class ScatterCopies:
         self.force = np.zeros((extra, n_nodes, dim))
 
 
+@njit(cache=True, inline="always")
+def _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, dim):
+    for t in range(copies_mass.shape[0]):
+        mass[i] += copies_mass[t, i]
+        for a in range(dim):
+            momentum[i, a] += copies_momentum[t, i, a]
+            force[i, a] += copies_force[t, i, a]
+
+
 @njit(parallel=True, cache=True)
 def add_copies(mass, momentum, force, copies_mass, copies_momentum, copies_force):
-    """Add the copies into the grid's arrays, node by node (the nodes split among threads)."""
+    """Add the copies into the grid's arrays, node by node (the nodes split among threads);
+    one loop per dimension, so that the component loop unrolls (solver/kernels.py's node loops)."""
     n, dim = momentum.shape
-    for i in numba.prange(n):
-        for t in range(copies_mass.shape[0]):
-            mass[i] += copies_mass[t, i]
-            for a in range(dim):
-                momentum[i, a] += copies_momentum[t, i, a]
-                force[i, a] += copies_force[t, i, a]
+    if dim == 2:
+        for i in numba.prange(n):
+            _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, 2)
+    elif dim == 3:
+        for i in numba.prange(n):
+            _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, 3)
+    else:
+        for i in numba.prange(n):
+            _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, 1)
 
 
 @njit(cache=True)

