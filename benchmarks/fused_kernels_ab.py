@@ -6,10 +6,11 @@ process, on the same arrays, taking turns (so a shared machine's load hits both 
 
 A case's scene is stepped a few times on this tree, then one P2G and one G2P call (MUSL: both
 G2P calls, the remap and the kinematics pass) are caught with their arguments; both templates'
-kernels then run on copies of those arguments, --rounds times each. The table gives the median ns per particle of each, their ratio (above 1: this
-tree is faster) and the largest difference of the arrays they wrote, relative to each array's
-largest entry ("bits" where they are equal). Only a base whose kernels take this tree's
-arguments can be compared (solver/fused_template.py `_p2g`, `_g2p` signatures).
+kernels then run on copies of those arguments, --rounds times each. The table gives the median
+ns per particle of each, their ratio (above 1: this tree is faster) and the largest difference
+of the arrays they wrote, relative to each array's largest entry ("bits" where they are equal).
+Only a base whose kernels take this tree's arguments can be compared (solver/fused_template.py
+`_p2g`, `_g2p` signatures).
 """
 from __future__ import annotations
 

@@ -372,7 +372,8 @@ def _parameters(lines: tuple | None) -> list[str]:
     if lines is None:
         return []
     names = [f"q{k}" for k in range(lines[2])]
-    return [f"{', '.join(names)}{',' if len(names) == 1 else ''} = " + ", ".join(f"material[{k}]" for k in range(lines[2]))]
+    values = ", ".join(f"material[{k}]" for k in range(lines[2]))
+    return [f"{', '.join(names)}{',' if len(names) == 1 else ''} = {values}"]
 
 
 def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
