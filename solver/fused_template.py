@@ -29,9 +29,12 @@ Names in the emitted code: axis a has the letter c = "xyz"[a] and the loop index
 g{c} (weights and gradients on the S nodes), d{c} = (index - f{c}) h (node minus
 particle); per component v{c}, vp{c}, ...; per tensor entry s{a}{b}, l{a}{b}, ....
 
-With the compile-time `fold` (MLS, where nothing reads f_I: solver/step/fused.py
-`folds_force`), P2G scatters m_I and (mv)_I + dt f_I only: dt m_p b_p joins m_p v_p and
-dt V_p sigma_p D_p^-1 is taken from m_p C_p once per particle, as MLS-MPM codes do.
+With the compile-time `fold` (MLS, or APIC with quadratic B-splines, where nothing reads
+f_I: solver/step/fused.py `folds_force`), P2G scatters m_I and (mv)_I + dt f_I only: dt m_p
+b_p joins m_p v_p; with MLS dt V_p sigma_p D_p^-1 is taken from m_p C_p once per particle, as
+MLS-MPM codes do; with APIC the momentum and the force share a row's factors: the node's
+w (m v + m C (x_I - x_p)) - dt V sigma grad w is wx[i] qa + wdx[i] qb - gx[i] fg, with wdx
+= wx (x_I - x_p) along x per particle and qa, qb, fg per row (`_p2g_row`).
 
 With a material's stress lines (`source(..., stress=)`: a model whose stress is a function of
 what P2G reads, F_p for neo-Hookean, L_p and V_p / V0_p for the fluid: solver/step/fused.py
@@ -206,7 +209,11 @@ def _p2g_node(dim: int, thermal: bool, contact: bool) -> list[str]:
         "if affine:",
         *[f"    p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
         _scatter("gm", "node", "+=", "w * m"),
-        *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)],
+        "if fold and not mls:   # w (m v + dt m b + m C (x_I - x_p)) - dt V sigma grad w (`_p2g_row`)",
+        *[f"    {_scatter('gp', f'node, {a}', '+=', f'wx[i] * qa{AXES[a]} + wdx[i] * qb{AXES[a]} - gx[i] * fg{AXES[a]}')}"
+          for a in range(dim)],
+        "else:",
+        *[f"    {_scatter('gp', f'node, {a}', '+=', f'w * p{AXES[a]}')}" for a in range(dim)],
         "if fold:",
         "    pass",
         "elif mls and loaded:",
@@ -282,14 +289,18 @@ def _p2g_row(dim: int) -> list[str]:
     (x_I - x_p) without its x term (a product and a sum per node fewer: P2G 1.05-1.12x with
     MLS); and, without MLS, the force's factors. With grad w = (gx[i] wo, wx[i] go1, ...) the
     node's w m b_p - V sigma_p grad w is wx[i] fw - gx[i] fg: fg = V sigma_a0 wo, fo = V
-    (sigma_a1 go1 + ...), fw = m b_a wo - fo."""
+    (sigma_a1 go1 + ...), fw = m b_a wo - fo. The folded APIC momentum (dt in s, dt m b in mv)
+    takes qa = wo r - fo and qb = wo m C_a0 once per row."""
     momentum = [f"r{c} = mv{c}" + "".join(f" + mc{a}{b} * d{AXES[b]}" for b in range(1, dim))
                 for a, c in enumerate(AXES[:dim])]
     force = [line for a, c in enumerate(AXES[:dim]) for line in (
         f"fg{c} = s{a}0 * {_outer(dim)}",
         f"fo{c} = " + " + ".join(f"s{a}{b} * {_outer(dim, b)}" for b in range(1, dim)),
         f"fw{c} = mb{c} * {_outer(dim)} - fo{c}")]
-    return momentum + force
+    folded = [line for a, c in enumerate(AXES[:dim]) for line in (
+        f"qa{c} = {_outer(dim)} * r{c} - fo{c}",
+        f"qb{c} = {_outer(dim)} * mc{a}0")]
+    return momentum + force + ["if fold and not mls:", *_indent(folded, 1)]
 
 
 def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
@@ -306,10 +317,13 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
         f"{_each('mb{c}', dim)} = {_each('m * acc[ap, {a}]', dim)}",
         f"{_each('mv{c}', dim)} = {_each('m * v[p, {a}]', dim)}",
         "vol = volume[p]",
-        "if fold:   # dt f_I into the momentum: w (m v + dt m b + (m C - dt V sigma D^-1)(x_I - x_p))",
+        "if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w",
         "    if loaded:   # (without a body force dt m b is +0: adding it would change no sum)",
         *_indent(_each_line("mv{c} += dt * mb{c}", dim), 2),
-        *_indent(_tensor("s{a}{b} = dt * (vol * sig{a}{b} * d_inv{b})", dim), 1),
+        "    if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)",
+        *_indent(_tensor("s{a}{b} = dt * (vol * sig{a}{b} * d_inv{b})", dim), 2),
+        "    else:",
+        *_indent(_tensor("s{a}{b} = dt * (vol * sig{a}{b})", dim), 2),
         "elif mls:",
         *_indent(_tensor("s{a}{b} = vol * sig{a}{b} * d_inv{b}", dim), 1),
         "else:",
@@ -317,12 +331,14 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
         _zeros(mc) + "   # m_p C_p (C holds one placeholder row without APIC)",
         "if affine:",
         *_indent(_tensor("mc{a}{b} = m * C[p, {a}, {b}]", dim), 1),
-        "if fold:",
+        "if fold and mls:",
         *_indent(_tensor("mc{a}{b} = mc{a}{b} - s{a}{b}", dim), 1),
         *(["mcap = m * capacity[p]   # 0 for a material without conduction: it adds zeros (the general",
            "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
            f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
         *_field_shift(contact),
+        "if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum",
+        "    wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)",
         *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact,
                   row_start=_p2g_row(dim)),
     ]
@@ -337,7 +353,7 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[s
            if contact else "") + ")",
         "m_I, (mv)_I (with the APIC term m w C (x_I - x_p) when `affine`) and f_I =\n"
         "    sum_p m_p w b_p - V_p sigma_p grad w (MLS: w D_p^-1 (x_I - x_p) for grad w). bad[t]: first\n"
-        "    particle of block t outside the grid. `fold` (MLS only): f_I is not formed, dt f_I is\n"
+        "    particle of block t outside the grid. `fold` (MLS; APIC): f_I is not formed, dt f_I is\n"
         "    added into (mv)_I instead (grid_force untouched).\n\n"
         "    variant: (support, affine, loaded, mls, fold, inline) constants; frame: (lower, h, inv_h,\n"
         "    cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of\n"

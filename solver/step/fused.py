@@ -78,16 +78,22 @@ class FusedPhases(Phases):
         """Nothing to store: every kernel evaluates the weights it needs."""
 
     def folds_force(self) -> bool:
-        """Whether P2G adds dt f_I into (mv)_I instead of forming f_I: MLS (so that a node's
-        dt f_I / m_I is bounded as its velocity is, the force being w-weighted like the momentum),
-        no FLIP blend and no hook that reads or adds to f_I or reads v_I^t (loads on nodes,
-        damping, absorbing faces, conduction: after_forces and before_update; contact fields too,
-        whose normals need the grad w a folded P2G does not form). v_I^t is then not formed: the grid update gives q_I / m_I for both
-        v_I^t and v~_I^{t+dt}, and v~_I^{t+dt} equals the unfolded step's to round-off, except
-        on nodes below the mass cut-off, where the unfolded step drops dt f_I / m_I (their
-        weight in any particle's gather is below 1e-9: docs/benchmarks.md, issue 18 third part)."""
+        """Whether P2G adds dt f_I into (mv)_I instead of forming f_I: with MLS (the force is
+        w-weighted like the momentum) or APIC with quadratic B-splines, no FLIP blend and no hook
+        that reads or adds to f_I or reads v_I^t (loads on nodes, damping, absorbing faces,
+        conduction: after_forces and before_update; contact fields too, whose normals need the
+        grad w a folded P2G does not form). v_I^t is then not formed: the grid update gives
+        q_I / m_I for both v_I^t and v~_I^{t+dt}, which equals the unfolded step's to round-off
+        except on nodes below the mass cut-off (1e-9 of the lightest particle's mass), where the
+        unfolded step drops dt f_I / m_I. What such a node's dt f_I / m_I gives a particle is
+        bounded: with MLS its weight in the gather is below 1e-9 (docs/benchmarks.md, issue 18
+        third part); with quadratic B-splines, at distance d (in cells) inside the stencil's edge,
+        w ~ d^2 and grad w ~ d / h, so dt f_I / m_I ~ 1 / d and the gather's w v_I ~ d and grad w
+        v_I ~ 1 stay finite (thirteenth part). With linear hats grad w stays 1 / h as w ~ d -> 0,
+        which is why solver/scene.py refuses APIC with them."""
         sim = self.sim
-        return (sim.affine is not None and sim.affine.mls and sim.flip_ratio == 0.0
+        quadratic = sim.scene.method.shape_function == "quadratic_bspline"
+        return (sim.affine is not None and (sim.affine.mls or quadratic) and sim.flip_ratio == 0.0
                 and not sim.hooks.after_forces and not sim.hooks.before_update)
 
     def forms_stress(self) -> bool:

@@ -125,17 +125,24 @@ def test_a_particle_leaving_the_grid_is_named_by_the_fused_step():
             sim.advance(2e-4)
 
 
-@pytest.mark.parametrize("method,extra,folds", [
-    ("usl-quadratic-mls", {}, True),
-    ("musl-quadratic-mls", {}, True),
-    ("musl-quadratic-apic", {}, False),                                  # APIC: f_I / m_I unbounded at the fringe
-    ("usl-quadratic-mls", {"damping": {"type": "viscous", "coefficient": 5.0}}, False),   # damping reads f_I
+QUADRATIC_APIC = {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": "apic"}
+
+
+@pytest.mark.parametrize("method,extra,dimension,folds", [
+    (METHODS["usl-quadratic-mls"], {}, 2, True),
+    (METHODS["musl-quadratic-mls"], {}, 2, True),
+    (METHODS["musl-quadratic-apic"], {}, 2, True),
+    (QUADRATIC_APIC, {}, 2, True),
+    (QUADRATIC_APIC, {}, 3, True),
+    (METHODS["usl-quadratic-flip"], {}, 2, False),                      # the FLIP blend reads v_I^t
+    (METHODS["usl-quadratic-mls"], {"damping": {"type": "viscous", "coefficient": 5.0}}, 2, False),   # damping reads f_I
+    (QUADRATIC_APIC, {"damping": {"type": "viscous", "coefficient": 5.0}}, 2, False),
 ])
-def test_fused_mls_folds_the_force_into_the_momentum_only_where_nothing_reads_it(method, extra, folds):
+def test_fused_step_folds_the_force_into_the_momentum_only_where_nothing_reads_it(method, extra, dimension, folds):
     """The folded P2G (dt f_I in (mv)_I, solver/step/fused.py) gives the unfolded step to round-off
     (1e-12 relative after 60 steps, as the fused kernels against the general ones); it is chosen for
-    MLS without a hook on f_I or v_I^t only."""
-    scene = load_scene({**SCENE_2D, **extra, "method": METHODS[method]})
+    MLS, and APIC with quadratic B-splines, without a FLIP blend or a hook on f_I or v_I^t only."""
+    scene = load_scene({**(SCENE_2D if dimension == 2 else SCENE_3D), **extra, "method": method})
     folded, unfolded = ExplicitMPM(scene), ExplicitMPM(scene)
     assert folded.phases.folds_force() is folds
     unfolded.phases.folds_force = lambda: False
@@ -143,9 +150,54 @@ def test_fused_mls_folds_the_force_into_the_momentum_only_where_nothing_reads_it
         folded.advance(2e-4)
         unfolded.advance(2e-4)
     a, b = folded.particles, unfolded.particles
+    assert np.max(np.abs(b.stress[:, 0, 0])) > 300.0   # the bodies did collide
     for name in ("x", "v", "F", "stress"):
         assert relative_difference(getattr(a, name), getattr(b, name)) <= TOLERANCE, name
+    if method["transfer"] != "flip":
+        assert relative_difference(a.extra["affine"], b.extra["affine"]) <= TOLERANCE
     assert folded.boundary_work == pytest.approx(unfolded.boundary_work, rel=1e-9, abs=1e-12)
+
+
+def _lone_particle_step(inside: float, fold: bool) -> tuple[np.ndarray, np.ndarray, float]:
+    """One USL APIC step of a lone stressed particle `inside` cells within the reach of the
+    node below it along x (its quadratic weight there is inside^2 / 2): F_p, v_p and the node's
+    mass over the cut-off."""
+    h = 0.1
+    scene = load_scene({
+        "name": "fringe", "dimension": 2, "grid": {"lower": [0.0, 0.0], "upper": [1.0, 1.0], "cell_size": h},
+        "materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1e6, "poisson_ratio": 0.3}},
+        "bodies": [{"name": "b", "material": "m", "particles_per_cell": 1,
+                    "geometry": {"type": "box", "lower": [0.5, 0.5], "upper": [0.6, 0.6]}}],
+        "method": QUADRATIC_APIC, "time": {"end": 1.0, "dt": 1e-4}})
+    sim = ExplicitMPM(scene)
+    if not fold:
+        sim.phases.folds_force = lambda: False
+    assert sim.phases.folds_force() is fold and sim.particles.count == 1
+    p = sim.particles
+    p.x[0] = [(5.5 - inside) * h, 0.55]
+    p.stress[0] = [[1e4, 2e3, 0.0], [2e3, -5e3, 0.0], [0.0, 0.0, 1.5e3]]
+    sim.advance(1e-4)
+    return p.F[0].copy(), p.v[0].copy(), 0.5 * inside**2 * p.mass[0] / sim.mass_cutoff
+
+
+def test_folded_apic_step_has_no_jump_where_the_mass_cut_off_drops_a_node():
+    """Unfolded, a node whose mass falls below the cut-off loses dt f_I / m_I. With quadratic
+    B-splines that term gives the particle's L_p a finite share (grad w ~ d / h against
+    f_I / m_I ~ 1 / d at d cells inside the node's reach), so the unfolded F_p jumps where the
+    cut-off bites, and the dropped force breaks momentum balance. The folded step keeps the term:
+    F_p at d = 1e-6 (node below the cut-off) is F_p at d = 1e-4 (above it) to O(d) relative,
+    and the lone particle's momentum stays zero to round-off."""
+    above, below = 1e-4, 1e-6
+    F_fold_above, _, mass_above = _lone_particle_step(above, True)
+    F_plain_above, _, _ = _lone_particle_step(above, False)
+    F_fold_below, v_fold_below, mass_below = _lone_particle_step(below, True)
+    F_plain_below, v_plain_below, _ = _lone_particle_step(below, False)
+    assert mass_above > 1.0 > mass_below
+    increment = np.abs(F_fold_above - np.eye(2)).max()
+    assert np.abs(F_plain_above - F_fold_above).max() <= 1e-9 * increment   # both keep the node
+    assert np.abs(F_fold_below - F_fold_above).max() <= 10 * above * increment
+    assert np.abs(F_plain_below - F_fold_above).max() >= 0.1 * increment     # the cut-off's jump
+    assert np.abs(v_fold_below).max() <= 1e-15 and np.abs(v_plain_below).max() >= 1e-9
 
 # -- heat conduction carried by the fused kernels (MUSL) ------------------------------
 
