@@ -22,7 +22,9 @@ VENV = ROOT / ".venv"
 BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
 PY = BIN / "python"
 STAMP = VENV / ".install-stamp"
-INSTALL_INPUTS = [ROOT / "pyproject.toml", ROOT / "clients" / "python" / "pyproject.toml"]
+# the compiler stack is pinned (why: scripts/constraints.txt); the other packages take pyproject's ranges
+CONSTRAINTS = ROOT / "scripts" / "constraints.txt"
+INSTALL_INPUTS = [ROOT / "pyproject.toml", ROOT / "clients" / "python" / "pyproject.toml", CONSTRAINTS]
 
 
 def _fingerprint() -> str:
@@ -44,7 +46,8 @@ def setup() -> None:
     print("installing the project and its dependencies into .venv", flush=True)
     pip = [str(PY), "-m", "pip", "install", "--disable-pip-version-check", "-q"]
     subprocess.run(pip + ["--upgrade", "pip"], check=True)
-    subprocess.run(pip + ["-e", f"{ROOT}[test]", "-e", str(ROOT / "clients" / "python")], check=True)
+    subprocess.run(pip + ["-c", str(CONSTRAINTS), "-e", f"{ROOT}[test]", "-e", str(ROOT / "clients" / "python")],
+                   check=True)
     STAMP.write_text(_fingerprint())
 
 

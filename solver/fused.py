@@ -56,7 +56,6 @@ _TOUCH = 1e-9   # as solver/shape/quadratic_bspline.py: round-off allowance at h
 USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docstring
 
 
-@functools.cache
 def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
             update: tuple | None = None):
     """The module of the fused kernels for `dim` dimensions: `p2g` and `g2p`
@@ -64,7 +63,16 @@ def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tupl
     carry heat conduction as well, with `contact` those of a velocity field per body, with
     `stress` (a material's name, lines and number of parameters) a P2G that can form the
     stress from F_p, with `update` (the same) a G2P that can update the stress from L_p
-    (separate modules: scenes without them keep theirs)."""
+    (separate modules: scenes without them keep theirs); compiled with FMA contraction
+    unless MPM_REPRODUCIBLE=1 (fused_template.contracts)."""
+    from solver import fused_template
+    return _kernels(dim, thermal, contact, stress, update, fused_template.contracts())
+
+
+@functools.cache
+def _kernels(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None, contract: bool):
+    """`kernels`, once per combination: `contract` keys the cache (the template reads the
+    environment itself), so a process that changes MPM_REPRODUCIBLE gets the other module."""
     from solver import fused_template
     return fused_template.load(dim, thermal, contact, stress, update)
 

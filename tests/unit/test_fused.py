@@ -24,6 +24,13 @@ from solver.stepper import ExplicitMPM
 TOLERANCE = 1e-12
 STEPS = 60
 
+
+@pytest.fixture
+def reproducible(monkeypatch):
+    """Fused kernels compiled without FMA contraction (solver/fused_template.py CONTRACT), where
+    a test holds them to the bits of kernels compiled without it."""
+    monkeypatch.setenv(fused_template.REPRODUCIBLE, "1")
+
 SCENE_2D = {
     "name": "fused-2d", "dimension": 2,
     "grid": {"lower": [0.0, 0.0], "upper": [1.0, 0.5], "cell_size": 0.04},
@@ -222,11 +229,22 @@ def conducting(dimension: int, method: str, threads: int) -> dict:
             "time": {**scene["time"], "dt": 1e-4}}
 
 
+def test_the_kernels_fuse_multiply_and_add_unless_the_environment_asks_for_reproducible_bits(monkeypatch):
+    decorator = "@njit(parallel=True, cache=True, fastmath={'contract'})".replace("'", '"')
+    assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
+    monkeypatch.setenv(fused_template.REPRODUCIBLE, "1")
+    assert "fastmath" not in fused_template.source(3)
+    monkeypatch.setenv(fused_template.REPRODUCIBLE, "yes")
+    with pytest.raises(ValueError, match="MPM_REPRODUCIBLE='yes': must be 0"):
+        fused_template.source(2)
+
+
 @pytest.mark.parametrize("dimension,method,threads", [
     (2, "musl-linear-flip", 1), (2, "musl-linear-flip", 2), (3, "musl-linear-flip", 2),
     (2, "musl-quadratic-mls", 2), (3, "musl-quadratic-apic", 1)])
-def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, threads):
-    """The thermal kernels do thermal_kernels.py's sums in the same order on the same weights.
+def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, threads, reproducible):
+    """The thermal kernels do thermal_kernels.py's sums in the same order on the same weights
+    (compiled without FMA contraction, `reproducible`, as the separate passes are).
     In 2D the weights are the same bits, so after one step from the same state T_p and q_p
     are too; in 3D the fused weight wx (wy wz) and the stored ((wx wy) wz) differ in the last
     bit, and MLS's gradient takes D_p = h^2/4 exactly where the general one sums it. Over 60 steps the mechanics' round-off (see the module docstring) reaches the
@@ -373,11 +391,13 @@ def stepped_with_and_without(scene, switch: str) -> tuple:
     (NEO_HOOKEAN, 2, "musl-quadratic-apic", 2), (NEO_HOOKEAN, 2, "usl-linear-pic", 1),
     (FLUID, 2, "usl-quadratic-mls", 2), (FLUID, 3, "usl-quadratic-mls", 1), (FLUID, 2, "musl-quadratic-apic", 1),
     (LINEAR_FLUID, 2, "usl-quadratic-mls", 1), (LINEAR_FLUID, 2, "usl-linear-pic", 2)])
-def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(material, dimension, method, threads):
+def test_the_stress_formed_in_p2g_gives_the_stress_pass_bit_for_bit(material, dimension, method, threads,
+                                                                    reproducible):
     """A neo-Hookean or fluid scene's fused P2G forms sigma_p (from F_p; from L_p and V_p / V0_p)
     and the stress pass is put off (Particles.defer); with MLS's USL gather L_p (= C_p) is not
-    written either. The same operations in the same order: the state is that of the step that
-    stores both, to the bit."""
+    written either. The same operations in the same order (and, `reproducible`, no multiply and
+    add fused where the material's own pass has none): the state is that of the step that stores
+    both, to the bit."""
     scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS[method], "parallel": {"threads": threads}})
@@ -416,10 +436,10 @@ def test_the_stress_pass_runs_where_p2g_cannot_form_the_stress(extra):
 @pytest.mark.parametrize("dimension,method,threads", [
     (2, "musl-linear-flip", 1), (3, "musl-linear-flip", 2), (2, "usl-quadratic-apic", 2),
     (3, "usl-quadratic-mls", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-mls", 1)])
-def test_the_stress_updated_in_g2p_gives_the_stress_pass_bit_for_bit(dimension, method, threads):
+def test_the_stress_updated_in_g2p_gives_the_stress_pass_bit_for_bit(dimension, method, threads, reproducible):
     """A linear elastic scene's fused G2P (USL's pass, MUSL's kinematics pass) updates sigma_p
     from the L_p it has just formed, and the stress pass does nothing: the same operations in the
-    same order, so the state is that of the step with the pass, to the bit."""
+    same order (`reproducible`, as above), so the state is that of the step with the pass, to the bit."""
     method = METHODS.get(method) or {**METHODS["usl-quadratic-mls"], "transfer": "apic"}
     scene = load_scene({**(SCENE_2D if dimension == 2 else SCENE_3D), "method": method,
                         "parallel": {"threads": threads}})
@@ -462,3 +482,24 @@ def test_an_initial_stress_is_read_by_the_first_p2g():
     prestressed.advance(2e-4)
     free.advance(2e-4)
     assert not np.array_equal(prestressed.particles.v, free.particles.v)
+
+
+@pytest.mark.parametrize("material,dimension,method", [
+    (NEO_HOOKEAN, 3, "musl-quadratic-apic"), (FLUID, 2, "usl-quadratic-mls"), (None, 3, "musl-linear-flip")])
+def test_contracted_kernels_give_the_reproducible_ones_to_round_off(material, dimension, method, monkeypatch):
+    """FMA contraction rounds a * b + c once instead of twice: over STEPS steps of a collision the
+    state moves by round-off only (and the two runs use two different modules)."""
+    scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
+    if material:
+        scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS[method]})
+    contracted = ExplicitMPM(scene)
+    monkeypatch.setenv(fused_template.REPRODUCIBLE, "1")
+    exact = ExplicitMPM(scene)
+    assert contracted.phases._kernels is not exact.phases._kernels
+    for _ in range(STEPS):
+        contracted.advance(2e-4)
+        exact.advance(2e-4)
+    assert np.abs(exact.particles.stress).max() > 1.0   # (the bodies have collided)
+    for name in ("x", "v", "F", "stress", "volume"):
+        assert relative_difference(getattr(contracted.particles, name), getattr(exact.particles, name)) <= TOLERANCE, name
