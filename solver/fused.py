@@ -64,7 +64,7 @@ def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tupl
     `stress` (a material's name, lines and number of parameters) a P2G that can form the
     stress from F_p, with `update` (the same) a G2P that can update the stress from L_p
     (separate modules: scenes without them keep theirs); compiled with FMA contraction
-    unless MPM_REPRODUCIBLE=1 (fused_template.contracts)."""
+    where MPM_FMA=1 (fused_template.contracts)."""
     from solver import fused_template
     return _kernels(dim, thermal, contact, stress, update, fused_template.contracts())
 
@@ -72,7 +72,7 @@ def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tupl
 @functools.cache
 def _kernels(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None, contract: bool):
     """`kernels`, once per combination: `contract` keys the cache (the template reads the
-    environment itself), so a process that changes MPM_REPRODUCIBLE gets the other module."""
+    environment itself), so a process that changes MPM_FMA gets the other module."""
     from solver import fused_template
     return fused_template.load(dim, thermal, contact, stress, update)
 

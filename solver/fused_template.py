@@ -16,8 +16,8 @@ beside the code that is read), and checkouts with different templates sharing a
 cache folder never rewrite each other's files.
 
 The kernels do the floating-point operations of the hand-written ones in the
-same order (LLVM may fuse a multiply and the add after it, `CONTRACT`: so the
-same results to round-off, and the same bits with MPM_REPRODUCIBLE=1): the weight of node (i, j, k) is
+same order, so the results are the same bits (with MPM_FMA=1, `CONTRACT`, LLVM may
+fuse a multiply and the add after it: the same results to round-off): the weight of node (i, j, k) is
 wx[i] * (wy[j] * wz[k]) with the product of the outer axes taken once per row
 (in 2D wx[i] * wy[j]), gradient component a the same product with g in place of
 w on axis a; sums run over the components in order (s00 * dwx + s01 * dwy + s02 *
@@ -158,23 +158,24 @@ def _stencil(dim: int, body: list[str], gradients: bool, contact: bool, row_star
     return lines + _indent(body, level + 1) + _indent(list(row_end), level)
 
 
-# LLVM may fuse a * b + c into one FMA (rounded once): the step 1.07-1.15x faster on the blocks
-# (docs/benchmarks.md, issue 18 fourteenth part). Only contraction: no reassociation, so every
-# sum keeps the order written and a run on one machine reproduces its bits; against kernels
-# compiled without it (the general backend, a material's own stress pass) the results agree to
-# round-off. Which products LLVM fuses depends on the CPU it compiles for, so the bits do too:
-# MPM_REPRODUCIBLE=1 leaves contraction out, for results whose bits do not depend on the CPU.
+# With MPM_FMA=1, LLVM may fuse a * b + c into one FMA (rounded once): the step 1.07-1.15x
+# faster on the blocks (docs/benchmarks.md, issue 18 fourteenth part). Only contraction, no
+# reassociation: every sum keeps the order written. Not the default, because the results then
+# agree with kernels compiled without it (the general backend, a material's own stress pass)
+# only to round-off: which products LLVM fuses depends on the CPU it compiles for, and a stress
+# the fused P2G forms (`_stress_of_particle`) is no longer the bits of the one a frame or a
+# checkpoint stores, so writing one would change the run's last bits.
 CONTRACT = '{"contract"}'
-REPRODUCIBLE = "MPM_REPRODUCIBLE"
+FMA = "MPM_FMA"
 
 
 def contracts() -> bool:
-    """Whether the kernels are compiled with `CONTRACT`: unless the environment sets MPM_REPRODUCIBLE=1."""
-    value = os.environ.get(REPRODUCIBLE, "0").strip()
+    """Whether the kernels are compiled with `CONTRACT`: where the environment sets MPM_FMA=1."""
+    value = os.environ.get(FMA, "0").strip()
     if value not in ("0", "1"):
-        raise ValueError(f"{REPRODUCIBLE}={value!r}: must be 0 (FMA contraction, faster) or 1 "
-                         "(no contraction: bits that do not depend on the CPU)")
-    return value == "0"
+        raise ValueError(f"{FMA}={value!r}: must be 0 (no contraction: the same bits on every CPU, "
+                         "whatever is written) or 1 (FMA contraction: faster, the same results to round-off)")
+    return value == "1"
 
 
 def _shell(signature: str, docstring: str, before: list[str], per_thread: list[str], per_particle: list[str],
@@ -545,7 +546,7 @@ def _stress_update(update: tuple | None) -> list[str]:
     """With `update` (a material's name, lines and number of parameters: solver/step/fused.py
     `updates_stress`) and the compile-time `updates`, the material's stress update from the L_p
     just formed, in place: its lines see l{a}{b}, dt, q0, q1, ... (its parameters) and add into
-    stress[p, a, b] as its own pass would, in its order (its result to round-off, `CONTRACT`)."""
+    stress[p, a, b] as its own pass would, in its order (the same bits; to round-off with `CONTRACT`)."""
     if update is None:
         return []
     return ["if updates:   # the material's pass, put here: its stress read and written once, L_p not read back",

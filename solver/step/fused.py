@@ -103,8 +103,8 @@ class FusedPhases(Phases):
         fluid from L_p and V_p / V0_p), when no hook changes the stress after the update (thermal
         expansion, F-bar), and, for a model whose wave speed comes with its stress update (the
         fluid), at a fixed time step: the CFL step would run the pass at every step anyway. The
-        stress the pass would store is used (to round-off, solver/fused_template.py CONTRACT;
-        the same bits with MPM_REPRODUCIBLE=1),
+        stress the pass would store is used to the bit (to round-off with
+        MPM_FMA=1: solver/fused_template.py CONTRACT),
         one pass over the particles and the stress's writes and reads less."""
         model = self._stress_model
         return (self._has_stress_lines and not self.sim.hooks.after_stress
@@ -116,8 +116,8 @@ class FusedPhases(Phases):
         material whose update is a function of L_p and the stress (a model with
         `stress_update_lines`: linear elasticity), when no hook runs between the kinematics and
         the stress update or after it (after_kinematics, after_stress; under USL after_g2p too,
-        which runs after the same pass). The pass's result to round-off (the bits
-        with MPM_REPRODUCIBLE=1); the stress read and written
+        which runs after the same pass). The same bits as the pass (round-off with
+        MPM_FMA=1); the stress read and written
         in the pass that has L_p, instead of L_p and the stress read again by a pass of their own
         (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle)."""
         hooks = self.sim.hooks

@@ -27,9 +27,9 @@ STEPS = 60
 
 @pytest.fixture
 def reproducible(monkeypatch):
-    """Fused kernels compiled without FMA contraction (solver/fused_template.py CONTRACT), where
-    a test holds them to the bits of kernels compiled without it."""
-    monkeypatch.setenv(fused_template.REPRODUCIBLE, "1")
+    """Fused kernels compiled without FMA contraction (the default; solver/fused_template.py
+    CONTRACT), where a test holds them to the bits of kernels compiled without it."""
+    monkeypatch.setenv(fused_template.FMA, "0")
 
 SCENE_2D = {
     "name": "fused-2d", "dimension": 2,
@@ -229,13 +229,14 @@ def conducting(dimension: int, method: str, threads: int) -> dict:
             "time": {**scene["time"], "dt": 1e-4}}
 
 
-def test_the_kernels_fuse_multiply_and_add_unless_the_environment_asks_for_reproducible_bits(monkeypatch):
+def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(monkeypatch):
+    monkeypatch.delenv(fused_template.FMA, raising=False)
+    assert "fastmath" not in fused_template.source(3)
+    monkeypatch.setenv(fused_template.FMA, "1")
     decorator = "@njit(parallel=True, cache=True, fastmath={'contract'})".replace("'", '"')
     assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
-    monkeypatch.setenv(fused_template.REPRODUCIBLE, "1")
-    assert "fastmath" not in fused_template.source(3)
-    monkeypatch.setenv(fused_template.REPRODUCIBLE, "yes")
-    with pytest.raises(ValueError, match="MPM_REPRODUCIBLE='yes': must be 0"):
+    monkeypatch.setenv(fused_template.FMA, "yes")
+    with pytest.raises(ValueError, match="MPM_FMA='yes': must be 0"):
         fused_template.source(2)
 
 
@@ -493,8 +494,9 @@ def test_contracted_kernels_give_the_reproducible_ones_to_round_off(material, di
     if material:
         scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS[method]})
+    monkeypatch.setenv(fused_template.FMA, "1")
     contracted = ExplicitMPM(scene)
-    monkeypatch.setenv(fused_template.REPRODUCIBLE, "1")
+    monkeypatch.setenv(fused_template.FMA, "0")
     exact = ExplicitMPM(scene)
     assert contracted.phases._kernels is not exact.phases._kernels
     for _ in range(STEPS):
