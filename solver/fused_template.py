@@ -17,8 +17,8 @@ cache folder never rewrite each other's files.
 
 The kernels do the floating-point operations of the hand-written ones in the
 same order, so the results are the same bits (with MPM_FMA=1, `CONTRACT`, LLVM may
-fuse a multiply and the add after it: the same results to round-off): the weight of node (i, j, k) is
-wx[i] * (wy[j] * wz[k]) with the product of the outer axes taken once per row
+fuse a multiply and the add after it: the same results to round-off): the weight of
+node (i, j, k) is wx[i] * (wy[j] * wz[k]) with the product of the outer axes taken once per row
 (in 2D wx[i] * wy[j]), gradient component a the same product with g in place of
 w on axis a; sums run over the components in order (s00 * dwx + s01 * dwy + s02 *
 dwz); F is read whole, n_ab = f_ab + dt l_a0 f_0b + dt l_a1 f_1b + ... written
