@@ -13,9 +13,11 @@ COPY worker worker
 COPY service service
 COPY examples examples
 COPY clients/web clients/web
+COPY scripts/constraints.txt scripts/constraints.txt
 # An editable install: the dashboard (clients/web) and the examples are read beside the
-# code, and numba writes its kernel cache beside it (as the mpm user).
-RUN pip install -e . && chown -R mpm /app
+# code, and numba writes its kernel cache beside it (as the mpm user). The compiler stack is
+# the one CI tests (scripts/constraints.txt).
+RUN pip install -c scripts/constraints.txt -e . && chown -R mpm /app
 
 USER mpm
 VOLUME /data

@@ -13,8 +13,9 @@ second; after a warm-up, --rounds rounds of --steps steps run on each in turn. T
 ns per particle-step with the switch on and off (median and best of the rounds) and off / on
 (above 1: the switch makes the step faster). Both copies end in the same state to round-off
 (tests/unit/test_fused.py checks it: folds_force joins the force's sum to the momentum's, and
-with MPM_FMA=1 a fused kernel may fuse a multiply and an add that a material's own pass does
-not; the other switches keep the bits by default); this script checks the positions to 1e-12.
+with FMA contraction, the default, a fused kernel may fuse a multiply and an add that a
+material's own pass does not; the other switches keep the bits with MPM_FMA=0); this script
+checks the positions to 1e-12.
 """
 from __future__ import annotations
 

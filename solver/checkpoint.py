@@ -80,6 +80,7 @@ class Restart:
     boundary_heat: float = 0.0   # heat in through heat_flux and convection faces (solver/thermal.py)
     tool_work: float = 0.0       # the tools' work, and where they are (solver/tools.py's state())
     tools: dict[str, np.ndarray] | None = None
+    derived: tuple[str, ...] = ()   # the particle arrays that were a function of the state (Particles.derived)
 
 
 def checkpoint_path(out_dir: str | os.PathLike) -> Path:
@@ -138,7 +139,7 @@ class Checkpointer:
                                 frames_written=frames_written, external_work=sim.external_work,
                                 boundary_work=sim.boundary_work, damping_work=sim.damping_work,
                                 **({"boundary_heat": heat["boundary_heat"]} if heat else {}),
-                                tool_work=tool_work)
+                                tool_work=tool_work, derived=",".join(sim.particles.derived_names))
                 for name, values in (tools or {}).items():
                     h5.create_dataset(f"tools/{name}", data=values)
                 for name, array in particles.items():
@@ -200,7 +201,8 @@ def load(out_dir: Path, scene) -> Restart | None:
                       boundary_work=float(attrs["boundary_work"]),
                       damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series,
                       boundary_heat=float(attrs.get("boundary_heat", 0.0)),
-                      tool_work=float(attrs.get("tool_work", 0.0)), tools=tools)
+                      tool_work=float(attrs.get("tool_work", 0.0)), tools=tools,
+                      derived=tuple(name for name in str(attrs.get("derived", "")).split(",") if name))
     source = _result_to_continue(Path(out_dir))
     try:
         complete = len(list_frames(source)) if source else 0
@@ -238,6 +240,8 @@ def _restore(sim, restart: Restart) -> None:
             p.extra[name[len("extra/"):]] = np.ascontiguousarray(array)
         else:
             setattr(p, name, np.ascontiguousarray(array))
+    # a stress the step forms from F_p is formed again, as in the run that wrote the checkpoint
+    p.mark_derived(restart.derived)
     # every process read every particle, as when it seeded them: keep its slab's
     sim.domain.distribute(p)
     sim.place()

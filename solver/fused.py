@@ -64,17 +64,16 @@ def kernels(dim: int, thermal: bool = False, contact: bool = False, stress: tupl
     `stress` (a material's name, lines and number of parameters) a P2G that can form the
     stress from F_p, with `update` (the same) a G2P that can update the stress from L_p
     (separate modules: scenes without them keep theirs); compiled with FMA contraction
-    where MPM_FMA=1 (fused_template.contracts)."""
+    unless MPM_FMA=0 (fused_template.contracts)."""
     from solver import fused_template
     return _kernels(dim, thermal, contact, stress, update, fused_template.contracts())
 
 
 @functools.cache
 def _kernels(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None, contract: bool):
-    """`kernels`, once per combination: `contract` keys the cache (the template reads the
-    environment itself), so a process that changes MPM_FMA gets the other module."""
+    """`kernels`, once per combination: a process that changes MPM_FMA gets the other module."""
     from solver import fused_template
-    return fused_template.load(dim, thermal, contact, stress, update)
+    return fused_template.load(dim, thermal, contact, stress, update, contract)
 
 
 _CONSTANTS = [np.empty((0,) * n) for n in range(1, 5)]
@@ -98,7 +97,13 @@ def inverse_d(apic_d: float, inv_h: np.ndarray) -> np.ndarray:
 
 # -- weights along one axis ------------------------------------------------------
 
-@njit(cache=True)
+# fastmath=False, said: a callee that does not set it inherits its caller's, but is compiled
+# and cached once per signature, without the flags in the key, so the contracted weights of
+# the first MPM_FMA=1 kernel to compile it were served to every MPM_FMA=0 kernel after it, in
+# later processes too (the quadratic B-spline regression cases failed so). Never contracted,
+# the weights are the same bits for both. (inline="always" would give each kernel its own
+# copy, but made the kernels' compile several times slower.)
+@njit(cache=True, fastmath=False)
 def _axis(S, x, lower, inv_h, cells):
     """First node i, position in cells from it f, 1D weights and derivatives (times
     inv_h) of a position along one axis, exactly as solver/shape/linear.py and

@@ -16,8 +16,8 @@ beside the code that is read), and checkouts with different templates sharing a
 cache folder never rewrite each other's files.
 
 The kernels do the floating-point operations of the hand-written ones in the
-same order, so the results are the same bits (with MPM_FMA=1, `CONTRACT`, LLVM may
-fuse a multiply and the add after it: the same results to round-off): the weight of
+same order, so the results are the same bits with MPM_FMA=0 (by default, `CONTRACT`,
+LLVM may fuse a multiply and the add after it: the same results to round-off): the weight of
 node (i, j, k) is wx[i] * (wy[j] * wz[k]) with the product of the outer axes taken once per row
 (in 2D wx[i] * wy[j]), gradient component a the same product with g in place of
 w on axis a; sums run over the components in order (s00 * dwx + s01 * dwy + s02 *
@@ -158,20 +158,22 @@ def _stencil(dim: int, body: list[str], gradients: bool, contact: bool, row_star
     return lines + _indent(body, level + 1) + _indent(list(row_end), level)
 
 
-# With MPM_FMA=1, LLVM may fuse a * b + c into one FMA (rounded once): the step 1.07-1.15x
-# faster on the blocks (docs/benchmarks.md, issue 18 fourteenth part). Only contraction, no
-# reassociation: every sum keeps the order written. Not the default, because the results then
-# agree with kernels compiled without it (the general backend, a material's own stress pass)
-# only to round-off: which products LLVM fuses depends on the CPU it compiles for, and a stress
-# the fused P2G forms (`_stress_of_particle`) is no longer the bits of the one a frame or a
-# checkpoint stores, so writing one would change the run's last bits.
+# By default LLVM may fuse a * b + c into one FMA (rounded once): the step 1.07-1.15x faster
+# on the blocks (docs/benchmarks.md, issue 18, fourteenth and fifteenth parts). Only
+# contraction, no reassociation: every sum keeps the order written. The results then agree
+# with kernels compiled without it (the general backend, a material's own stress pass) to
+# round-off, and which products LLVM fuses depends on the CPU it compiles for; MPM_FMA=0
+# gives the same bits on every CPU (the regression cases run so). A stress the fused P2G
+# forms (`_stress_of_particle`) differs from the one a frame or a checkpoint stores in its
+# last bits, so P2G forms it again after such a read (solver/state.py `Particles.derived`):
+# what is written never changes the run.
 CONTRACT = '{"contract"}'
 FMA = "MPM_FMA"
 
 
 def contracts() -> bool:
-    """Whether the kernels are compiled with `CONTRACT`: where the environment sets MPM_FMA=1."""
-    value = os.environ.get(FMA, "0").strip()
+    """Whether the kernels are compiled with `CONTRACT`: unless the environment sets MPM_FMA=0."""
+    value = os.environ.get(FMA, "1").strip()
     if value not in ("0", "1"):
         raise ValueError(f"{FMA}={value!r}: must be 0 (no contraction: the same bits on every CPU, "
                          "whatever is written) or 1 (FMA contraction: faster, the same results to round-off)")
@@ -179,9 +181,9 @@ def contracts() -> bool:
 
 
 def _shell(signature: str, docstring: str, before: list[str], per_thread: list[str], per_particle: list[str],
-           after: list[str]) -> list[str]:
+           after: list[str], contract: bool) -> list[str]:
     """A parallel kernel: a prange over contiguous blocks of particles (solver/threads.py)."""
-    options = f", fastmath={CONTRACT}" if contracts() else ""
+    options = f", fastmath={CONTRACT}" if contract else ""
     return ["", "", f"@njit(parallel=True, cache=True{options})", f"def {signature}:", f'    """{docstring}"""',
             *_indent(before, 1),
             "    bounds = block_bounds(x.shape[0], threads)",
@@ -367,7 +369,7 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
     ]
 
 
-def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
+def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None, contract: bool) -> list[str]:
     return _shell(
         "p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,\n"
         "        grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad, dt"
@@ -403,7 +405,7 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[s
         ["if fold_.ndim == 2:",
          "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
          "else:",
-         *_p2g_reduce(thermal, contact)])
+         *_p2g_reduce(thermal, contact)], contract)
 
 
 def _parameters(lines: tuple | None) -> list[str]:
@@ -592,7 +594,7 @@ def _g2p_particle(dim: int, thermal: bool, contact: bool, update: tuple | None) 
     ]
 
 
-def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None) -> list[str]:
+def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None, contract: bool) -> list[str]:
     return _shell(
         "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
         "        flip, dt, d_inv, copies_mom, stress, material, bad"
@@ -627,25 +629,29 @@ def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None) -> list[s
         _g2p_particle(dim, thermal, contact, update),
         ["if remaps:", "    _reduce_mass_momentum(remapped, grid_mom, copies_remapped, copies_mom)"]
         if thermal else
-        ["if remaps and copies_mom.shape[0] > 0:", "    add_node_copies(grid_mom, copies_mom)"])
+        ["if remaps and copies_mom.shape[0] > 0:", "    add_node_copies(grid_mom, copies_mom)"], contract)
 
 
 # -- the generated module ------------------------------------------------------------
 
 def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
-           update: tuple | None = None) -> str:
+           update: tuple | None = None, contract: bool | None = None) -> str:
     """The text of the module of the fused kernels for `dim` (2 or 3) dimensions; with
     `thermal`, the kernels that carry conduction too, with `contact` those that step a
     velocity field per body (a scene without them never loads those: its module's text, and
     so its kernels, are those of a template without heat or contact); with `stress`, a
     material's (name, lines, number of parameters), a P2G that can form sigma_p from F_p
     (`_stress_of_particle`); with `update`, a material's (name, lines, number of parameters), a G2P
-    that can update the stress from L_p (`_stress_update`)."""
+    that can update the stress from L_p (`_stress_update`); with `contract` (by default what
+    the environment asks for: `contracts`) compiled with FMA contraction."""
+    if contract is None:
+        contract = contracts()
     if thermal and contact:
         raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
     header = (HEADER.format(dim=dim) + ("\nimport math" if stress else "") + (THERMAL_IMPORTS if thermal else "")
               + ("\nfrom solver.fused import _reduce_with" if contact else ""))
-    return "\n".join([header, *_p2g(dim, thermal, contact, stress), *_g2p(dim, thermal, contact, update)]) + "\n"
+    return "\n".join([header, *_p2g(dim, thermal, contact, stress, contract),
+                      *_g2p(dim, thermal, contact, update, contract)]) + "\n"
 
 
 def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None = None) -> str:
@@ -654,14 +660,14 @@ def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: 
 
 
 def write(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
-          update: tuple | None = None) -> Path:
+          update: tuple | None = None, contract: bool | None = None) -> Path:
     """The generated file for `dim`, (re)written only when its text changed (solver/generated.py)."""
     return generated.write("fused", _stem(dim, thermal, contact, stress, update),
-                           source(dim, thermal, contact, stress, update))
+                           source(dim, thermal, contact, stress, update, contract))
 
 
 def load(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
-         update: tuple | None = None):
+         update: tuple | None = None, contract: bool | None = None):
     """The module of the fused kernels for `dim` dimensions (attributes p2g, g2p)."""
     return generated.load("fused", _stem(dim, thermal, contact, stress, update),
-                          source(dim, thermal, contact, stress, update))
+                          source(dim, thermal, contact, stress, update, contract))

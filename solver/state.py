@@ -15,8 +15,8 @@ class _Deferred:
     step forms the stress of a material that is a function of F_p alone inside P2G, and
     MLS's L_p after a USL gather is C_p (solver/step/fused.py), so the step need not store
     them. Any read of the attribute runs the pending update first, so what outputs, checks,
-    checkpoints, materials and hooks read is always the current state; assigning the array
-    drops the pending update (the new array is the state)."""
+    checkpoints, materials and hooks read is always the current state; the array stays
+    `derived` (a function of the state) until it is assigned: the new array is the state."""
 
     def __set_name__(self, owner, name: str) -> None:
         self.name = name
@@ -31,6 +31,7 @@ class _Deferred:
 
     def __set__(self, particles, value) -> None:
         particles.__dict__.setdefault("_pending", {}).pop(self.name, None)
+        particles.__dict__.setdefault("_derived", set()).discard(self.name)
         particles.__dict__[self.name] = value
 
 
@@ -64,12 +65,29 @@ class Particles:
     def defer(self, name: str, update) -> None:
         """Put the update of the array `name` off: `update()` brings it up to date, and runs at
         its first read (`_Deferred`) unless the step forms it itself first. (`_pending`, name ->
-        update, is made by the first assignment of a `_Deferred` array.)"""
+        update, and `_derived` are made by the first assignment of a `_Deferred` array.)"""
         self._pending[name] = update
+        self._derived.add(name)
 
     def pending(self, name: str) -> bool:
         """Whether the stored array `name` is out of date, its update put off (`defer`)."""
         return name in self._pending
+
+    def derived(self, name: str) -> bool:
+        """Whether the array `name` is what its deferred update forms from the state (pending,
+        or brought up to date by a read since), not state of its own (an initial stress, an
+        array assigned). A step that forms it may then form it again rather than read it,
+        whatever was read in between: a frame or a checkpoint then leaves the bits alone even
+        where the step's own formula rounds differently from the update (FMA contraction)."""
+        return name in self._derived
+
+    @property
+    def derived_names(self) -> tuple[str, ...]:
+        return tuple(sorted(self._derived))
+
+    def mark_derived(self, names) -> None:
+        """Mark arrays assigned from a state where they were `derived` (a checkpoint's) as derived."""
+        self._derived.update(names)
 
     def stored(self, name: str) -> np.ndarray:
         """The array `name` as stored, without running a pending update: for a kernel that
@@ -96,16 +114,20 @@ class Particles:
     def take(self, order: np.ndarray) -> None:
         """Keep the particles `order` (indices), in that order, in every array (np.take: numpy's
         fancy indexing copies (n, 3, 3) rows 4-5x slower)."""
-        self.replace({name: np.take(a, order, axis=0) for name, a in self.arrays().items()})
+        self.replace({name: np.take(a, order, axis=0) for name, a in self.arrays().items()}, rearranged=True)
 
-    def replace(self, arrays: dict[str, np.ndarray]) -> None:
-        """Set the per-particle arrays named as arrays() names them (all the same length)."""
+    def replace(self, arrays: dict[str, np.ndarray], rearranged: bool = False) -> None:
+        """Set the per-particle arrays named as arrays() names them (all the same length);
+        `rearranged`: they hold the same state's rows, reordered or moved between processes,
+        so an array that was `derived` still is."""
+        derived = self.derived_names if rearranged else ()
         for name, a in arrays.items():
             a = np.ascontiguousarray(a)
             if name.startswith("extra/"):
                 self.extra[name[len("extra/"):]] = a
             else:
                 setattr(self, name, a)
+        self.mark_derived(derived)
 
 
 @dataclass

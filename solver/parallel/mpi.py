@@ -154,7 +154,7 @@ class SlabDomain:
                     if r != self.rank and counts[r] else None for r in range(self.processes)]
         incoming = [part for part in self.comm.alltoall(outgoing) if part]
         stay = order[start[self.rank]:start[self.rank + 1]]
-        particles.replace(_merged(arrays, stay, incoming, self._material))
+        particles.replace(_merged(arrays, stay, incoming, self._material), rearranged=True)
         return max(moved, PARTICLES_MOVED)
 
     def _positions(self, particles) -> np.ndarray:

@@ -103,9 +103,9 @@ class FusedPhases(Phases):
         fluid from L_p and V_p / V0_p), when no hook changes the stress after the update (thermal
         expansion, F-bar), and, for a model whose wave speed comes with its stress update (the
         fluid), at a fixed time step: the CFL step would run the pass at every step anyway. The
-        stress the pass would store is used to the bit (to round-off with
-        MPM_FMA=1: solver/fused_template.py CONTRACT),
-        one pass over the particles and the stress's writes and reads less."""
+        stress the pass would store is used to the bit with MPM_FMA=0 (to round-off with FMA
+        contraction, the default: solver/fused_template.py CONTRACT), one pass over the particles
+        and the stress's writes and reads less."""
         model = self._stress_model
         return (self._has_stress_lines and not self.sim.hooks.after_stress
                 and (self.sim.scene.time.dt is not None or not getattr(model, "stress_sets_wave_speed", False)))
@@ -116,8 +116,8 @@ class FusedPhases(Phases):
         material whose update is a function of L_p and the stress (a model with
         `stress_update_lines`: linear elasticity), when no hook runs between the kinematics and
         the stress update or after it (after_kinematics, after_stress; under USL after_g2p too,
-        which runs after the same pass). The same bits as the pass (round-off with
-        MPM_FMA=1); the stress read and written
+        which runs after the same pass). The same bits as the pass with MPM_FMA=0
+        (round-off with contraction, the default); the stress read and written
         in the pass that has L_p, instead of L_p and the stress read again by a pass of their own
         (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle)."""
         hooks = self.sim.hooks
@@ -127,9 +127,10 @@ class FusedPhases(Phases):
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
         p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
-        # inline only while the update is put off: a stress stored since (read, or set by a
-        # checkpoint or an initial stress) is the state, and is read
-        variant = self._p2g_variants[self.folds_force(), p.pending("stress")]
+        # formed while it is a function of the state (Particles.derived), even when a frame or a
+        # checkpoint has read it since: the bits do not depend on what was read; an initial
+        # stress or one assigned is the state, and is read
+        variant = self._p2g_variants[self.folds_force(), p.derived("stress")]
         # (L_p put off is C_p: `_g2p`)
         L = self._affine_matrix if p.pending("L") else p.stored("L")
         self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stored("stress"), p.F, L,

@@ -13,9 +13,9 @@ global quantity:
 Storing whole arrays would take tens of MB for the 3D examples; the hash decides
 bit identity, the sample and the sums bound round-off.
 
-The cases run with MPM_FMA=0 (the default, set here in case the environment sets
-it: solver/fused_template.py): without FMA contraction the fused kernels give the
-same bits on every CPU, so a baseline recorded on one machine holds on another.
+The cases run with MPM_FMA=0 (the default is 1: solver/fused_template.py CONTRACT):
+without FMA contraction the fused kernels give the same bits on every CPU, so a
+baseline recorded on one machine holds on another.
 """
 from __future__ import annotations
 

@@ -27,8 +27,9 @@ STEPS = 60
 
 @pytest.fixture
 def reproducible(monkeypatch):
-    """Fused kernels compiled without FMA contraction (the default; solver/fused_template.py
-    CONTRACT), where a test holds them to the bits of kernels compiled without it."""
+    """Fused kernels compiled without FMA contraction (MPM_FMA=0; by default they contract:
+    solver/fused_template.py CONTRACT), where a test holds them to the bits of kernels compiled
+    without it."""
     monkeypatch.setenv(fused_template.FMA, "0")
 
 SCENE_2D = {
@@ -230,14 +231,28 @@ def conducting(dimension: int, method: str, threads: int) -> dict:
 
 
 def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(monkeypatch):
-    monkeypatch.delenv(fused_template.FMA, raising=False)
+    monkeypatch.setenv(fused_template.FMA, "0")
     assert "fastmath" not in fused_template.source(3)
-    monkeypatch.setenv(fused_template.FMA, "1")
     decorator = "@njit(parallel=True, cache=True, fastmath={'contract'})".replace("'", '"')
+    monkeypatch.delenv(fused_template.FMA, raising=False)   # the default
     assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
+    monkeypatch.setenv(fused_template.FMA, "1")
+    assert fused_template.source(2).count(decorator) == 2
     monkeypatch.setenv(fused_template.FMA, "yes")
     with pytest.raises(ValueError, match="MPM_FMA='yes': must be 0"):
         fused_template.source(2)
+
+
+def test_the_contracted_kernels_leave_the_weights_they_call_uncontracted(monkeypatch):
+    """numba compiles a called function once per signature, with the fastmath of its first
+    caller (a callee inherits it), and caches it so: a function the contracted kernels call
+    first would reach the reproducible ones contracted. `_axis` (the quadratic B-spline weights,
+    the kernels' one callee with products to contract) says fastmath=False: no compiled
+    version of it holds a contracted operation after the contracted kernels ran."""
+    monkeypatch.setenv(fused_template.FMA, "1")
+    ExplicitMPM(load_scene({**SCENE_2D, "method": METHODS["usl-quadratic-mls"]})).advance(2e-4)
+    compiled = fused._axis.inspect_llvm()
+    assert compiled and all(" contract " not in text for text in compiled.values())
 
 
 @pytest.mark.parametrize("dimension,method,threads", [
@@ -473,8 +488,8 @@ def test_the_stress_pass_runs_where_g2p_cannot_update_the_stress(extra, updates)
 
 
 def test_an_initial_stress_is_read_by_the_first_p2g():
-    """P2G forms the stress only while the update is put off: a stress set before the first step
-    (or by a checkpoint) is the state, and is what the first step's P2G reads."""
+    """P2G forms the stress only where it is a function of the state (Particles.derived): a
+    stress set before the first step is the state, and is what the first step's P2G reads."""
     scene = copy.deepcopy(SCENE_2D)
     scene["materials"] = {"m": NEO_HOOKEAN}
     scene["method"] = METHODS["usl-quadratic-mls"]
@@ -483,6 +498,44 @@ def test_an_initial_stress_is_read_by_the_first_p2g():
     prestressed.advance(2e-4)
     free.advance(2e-4)
     assert not np.array_equal(prestressed.particles.v, free.particles.v)
+
+
+@pytest.mark.parametrize("material,dimension,method", [
+    (NEO_HOOKEAN, 3, "musl-quadratic-apic"), (FLUID, 2, "usl-quadratic-mls")])
+def test_reading_the_stress_formed_in_p2g_leaves_the_run_s_bits(material, dimension, method, monkeypatch):
+    """With FMA contraction the stress P2G forms and the one the material's pass stores for a
+    reader (a frame, a checkpoint) differ in their last bits. P2G forms it again after a read
+    (Particles.derived), so a run read every few steps keeps the bits of one never read."""
+    monkeypatch.setenv(fused_template.FMA, "1")
+    scene = copy.deepcopy(SCENE_2D if dimension == 2 else SCENE_3D)
+    scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS[method]})
+    read, unread = ExplicitMPM(scene), ExplicitMPM(scene)
+    assert read.phases.forms_stress()
+    for step in range(STEPS):
+        read.advance(2e-4)
+        unread.advance(2e-4)
+        if step % 5 == 0:
+            assert np.abs(read.particles.stress).max() >= 0.0   # the material's pass runs, as for a frame
+            assert read.particles.derived("stress") and not read.particles.pending("stress")
+    assert np.abs(unread.particles.stress).max() > 1.0   # (the bodies have collided)
+    for name in ("x", "v", "F", "stress"):
+        assert np.array_equal(getattr(read.particles, name), getattr(unread.particles, name)), name
+
+
+def test_a_derived_stress_stays_derived_when_reordered_and_is_state_once_assigned():
+    """Particles.take (sorting, a process's slab) moves rows of the same state: a stress that was
+    a function of the state still is. An assigned stress is the state, and P2G reads it."""
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"] = {"m": NEO_HOOKEAN}
+    sim = ExplicitMPM(load_scene({**scene, "method": METHODS["usl-quadratic-mls"]}))
+    assert not sim.particles.derived("stress")   # before the first stress pass
+    sim.advance(2e-4)
+    assert sim.particles.pending("stress") and sim.particles.derived("stress")
+    sim.particles.take(np.arange(sim.particles.count)[::-1])
+    assert sim.particles.derived("stress") and not sim.particles.pending("stress")
+    sim.particles.stress = sim.particles.stress.copy()
+    assert not sim.particles.derived("stress")
 
 
 @pytest.mark.parametrize("material,dimension,method", [

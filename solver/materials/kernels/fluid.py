@@ -97,8 +97,9 @@ class Fluid:
     def stress_lines(self, dim: int) -> tuple[str, ...]:
         """The in-plane stress as the fused P2G forms it from L_p and V0_p / V_p (solver/fused_template.py
         `_stress_of_particle`; q0..q3 are K, mu, the pressure floor and gamma): `_update_one`'s
-        operations in its order, so the same bits as the stored stress (to round-off with
-        MPM_FMA=1: solver/fused_template.py CONTRACT). gamma = 1 is written in."""
+        operations in its order, so the same bits as the stored stress with MPM_FMA=0 (to
+        round-off with FMA contraction, the default: solver/fused_template.py CONTRACT). gamma = 1 is
+        written in."""
         lines = ["fl_ratio = vol0_p / vol_p",
                  "fl_stiff = fl_ratio" if self.gamma == 1.0 else "fl_stiff = fl_ratio**q3",
                  "fl_pressure = max(q0 * (fl_stiff - 1.0), q2)",

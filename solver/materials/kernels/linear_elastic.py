@@ -62,8 +62,8 @@ class LinearElastic(IsotropicElastic):
     def stress_update_lines(self, dim: int) -> tuple[str, ...]:
         """This update as the fused G2P runs it, right after it forms L_p (solver/fused_template.py
         `_stress_update`: l{a}{b} are L_p's entries, q0 and q1 lambda and mu): `_update_one`'s
-        operations in its order, so the same bits as `update_stress` (to round-off with
-        MPM_FMA=1: solver/fused_template.py CONTRACT)."""
+        operations in its order, so the same bits as `update_stress` with MPM_FMA=0 (to
+        round-off with FMA contraction, the default: solver/fused_template.py CONTRACT)."""
         trace = " + ".join(["0.0"] + [f"l{a}{a}" for a in range(dim)])
         return (f"le_tr = ({trace}) * dt",
                 *[f"stress[p, {a}, {a}] += q0 * le_tr" for a in range(3)],

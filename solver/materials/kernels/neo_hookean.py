@@ -67,8 +67,8 @@ class NeoHookean(IsotropicElastic):
     def stress_lines(self, dim: int) -> tuple[str, ...]:
         """The in-plane stress as the fused P2G forms it from F_p (solver/fused_template.py
         `_stress_of_particle`: f{a}{b} are F_p's entries, fj its determinant, q0, q1 lambda and
-        mu): `_update_one`'s operations in its order, so the same bits as the stored stress (to
-        round-off with MPM_FMA=1: solver/fused_template.py CONTRACT)."""
+        mu): `_update_one`'s operations in its order, so the same bits as the stored stress with
+        MPM_FMA=0 (to round-off with FMA contraction, the default: solver/fused_template.py CONTRACT)."""
         lines = ["nh_c = q0 * math.log(fj) / fj"]
         for a in range(dim):
             for b in range(dim):
