@@ -78,7 +78,8 @@ class Particles:
         or brought up to date by a read since), not state of its own (an initial stress, an
         array assigned). A step that forms it may then form it again rather than read it,
         whatever was read in between: a frame or a checkpoint then leaves the bits alone even
-        where the step's own formula rounds differently from the update (FMA contraction)."""
+        where the step's own formula rounds differently from the update (FMA contraction).
+        Writing into a derived array in place does not make it state: assign it."""
         return name in self._derived
 
     @property
