@@ -422,8 +422,10 @@ class JobStore:
     # -- the lease of a running job ----------------------------------------------
 
     def acquire_lease(self, job_id: str, token: str, seconds: float) -> bool:
-        """Only one worker runs a job: a redelivered copy finds the lease taken."""
-        return bool(self.redis.set(lease_key(job_id), token, nx=True, px=int(seconds * 1000)))
+        """Only one worker runs a job: a redelivered copy finds the lease taken. Its holder
+        acquires it again (a retry after Redis went away before answering)."""
+        return bool(self.redis.set(lease_key(job_id), token, nx=True, px=int(seconds * 1000))
+                    or self.renew_lease(job_id, token, seconds))
 
     def renew_lease(self, job_id: str, token: str, seconds: float) -> bool:
         return bool(self._renew(keys=[lease_key(job_id)], args=[token, int(seconds * 1000)]))

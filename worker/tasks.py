@@ -64,18 +64,23 @@ def run_job(self, job_id: str) -> None:
     job_id = parse_job_id(job_id)
     store = get_store()
     worker = self.request.hostname or "worker"
-    job = store.get(job_id)
+    # Redis going away while a job is taken is waited out, not raised: a raised error would
+    # acknowledge the message and leave the job queued with nothing on the queue.
+    job = _retry_redis(lambda: store.get(job_id))
     if job is None or job["status"] in FINISHED:
         log.info("job skipped: finished or deleted", extra={"job_id": job_id})
         return
     token = f"{worker}:{uuid.uuid4()}"
-    if not store.acquire_lease(job_id, token, get_settings().lease_seconds):
+    if not _retry_redis(lambda: store.acquire_lease(job_id, token, get_settings().lease_seconds)):
         log.warning("job skipped: another worker holds it", extra={"job_id": job_id})
         return
     try:
         _run_leased(store, job_id, job, worker, token)
     finally:
-        store.release_lease(job_id, token)
+        try:
+            store.release_lease(job_id, token)
+        except redis.RedisError as exc:  # it expires by itself within MPM_LEASE_SECONDS
+            log.warning("lease not released: %s", exc, extra={"job_id": job_id})
 
 
 def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, token: str) -> None:
@@ -87,10 +92,10 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     if lost >= settings.max_attempts:
         _give_up(store, job_id, files, lost, "its worker was lost")
         return
-    before = store.transition(
+    before = _retry_redis(lambda: store.transition(
         job_id, ACTIVE, "running", started_at=now_iso(), worker=worker,
         attempts=job.get("attempts", 0) + 1, lost=lost, steps_per_second=None, eta_seconds=None,
-        error=None)
+        error=None))
     if before not in ACTIVE:
         log.info("job skipped: it is %s", before, extra={"job_id": job_id})
         return
@@ -99,8 +104,8 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     resuming = checkpoint_path(files.dir).exists()
     if not resuming:
         _clear_outputs(files)
-    if store.cancel_requested(job_id):
-        store.transition(job_id, ["running"], "cancelled", finished_at=now_iso())
+    if _retry_redis(lambda: store.cancel_requested(job_id)):
+        _retry_redis(lambda: store.transition(job_id, ["running"], "cancelled", finished_at=now_iso()))
         return
     log.info("job resumed from its checkpoint" if resuming else "job started",
              extra={"job_id": job_id, "worker": worker})
