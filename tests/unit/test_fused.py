@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numba import njit
 
 from solver import fused, fused_template, generated, shape
 from solver.scene import load_scene
@@ -243,16 +244,37 @@ def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(mon
         fused_template.source(2)
 
 
-def test_the_contracted_kernels_leave_the_weights_they_call_uncontracted(monkeypatch):
+@njit(fastmath={"contract"})
+def _middle_weight_through_axis(x, inv_h, cells):
+    """A contracted caller of `_axis`, as the fused kernels are (compiled here, never cached)."""
+    return fused._axis(3, x, 0.0, inv_h, cells)[3][1]
+
+
+@njit(fastmath={"contract"})
+def _middle_weight_contracted(x, inv_h, cells):
+    """The same weight written in a contracted function: 0.75 - t*t becomes one fused operation."""
+    s = x * inv_h
+    t = s - min(max(int(s - 0.5), 0), cells - 2) - 1.0
+    return 0.75 - t * t
+
+
+def test_the_contracted_kernels_leave_the_weights_they_call_uncontracted():
     """numba compiles a called function once per signature, with the fastmath of its first
     caller (a callee inherits it), and caches it so: a function the contracted kernels call
     first would reach the reproducible ones contracted. `_axis` (the quadratic B-spline weights,
-    the kernels' one callee with products to contract) says fastmath=False: no compiled
-    version of it holds a contracted operation after the contracted kernels ran."""
-    monkeypatch.setenv(fused_template.FMA, "1")
-    ExplicitMPM(load_scene({**SCENE_2D, "method": METHODS["usl-quadratic-mls"]})).advance(2e-4)
-    compiled = fused._axis.inspect_llvm()
-    assert compiled and all(" contract " not in text for text in compiled.values())
+    the kernels' one callee with a product to contract: 0.75 - t*t) says fastmath=False, so a
+    contracted first caller still gets the product rounded before the subtraction."""
+    cells, inv_h = 64, 64.0 / 0.9
+    xs = np.random.default_rng(3).uniform(0.05, 0.85, 400)
+    separately = []
+    for x in xs:
+        s = x * inv_h
+        t = s - min(max(int(s - 0.5), 0), cells - 2) - 1.0
+        separately.append(0.75 - t * t)   # Python rounds the product, then the difference
+    contracted = [_middle_weight_contracted(x, inv_h, cells) for x in xs]
+    if contracted == separately:
+        pytest.skip("this CPU has no fused multiply-add: nothing is contracted")
+    assert [_middle_weight_through_axis(x, inv_h, cells) for x in xs] == separately
 
 
 @pytest.mark.parametrize("dimension,method,threads", [
