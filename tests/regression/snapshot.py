@@ -33,10 +33,13 @@ SAMPLE_ROWS = 32
 REPRODUCIBLE = {"MPM_FMA": "0"}
 
 
-def run_case(case) -> dict[str, np.ndarray]:
+def run_case(case, reproducible: bool = True) -> dict[str, np.ndarray]:
     """The state after the case's steps, the time step chosen as the runner does (the
     fixed dt, else the stable step of the current state), with kernels whose bits do not
-    depend on the CPU (REPRODUCIBLE)."""
+    depend on the CPU (REPRODUCIBLE), or with those of the environment (`reproducible`
+    False: tests/regression/drift.py)."""
+    if not reproducible:
+        return _run(case)
     with mock.patch.dict(os.environ, REPRODUCIBLE):
         return _run(case)
 
@@ -93,10 +96,17 @@ def differences(stored: dict[str, np.ndarray], fresh: dict[str, np.ndarray], rel
         if relative is None:
             problems.append(f"{name}: bits differ")
             continue
-        scale = max(float(np.max(stored[f"{name}|abs_sum"], initial=0.0)), 1e-300)
-        row_scale = max(float(np.max(np.abs(stored[f"{name}|sample"]), initial=0.0)), 1e-300)
-        sums = np.max(np.abs(stored[f"{name}|sum"] - fresh[f"{name}|sum"]), initial=0.0) / scale
-        sample = np.max(np.abs(stored[f"{name}|sample"] - fresh[f"{name}|sample"]), initial=0.0) / row_scale
-        if not (sums <= relative and sample <= relative):
-            problems.append(f"{name}: differs by {max(sums, sample):.3g} relative (allowed {relative:g})")
+        moved = relative_difference(stored, fresh, name)
+        if not moved <= relative:
+            problems.append(f"{name}: differs by {moved:.3g} relative (allowed {relative:g})")
     return problems
+
+
+def relative_difference(stored: dict[str, np.ndarray], fresh: dict[str, np.ndarray], name: str) -> float:
+    """How far one array of two fingerprints apart: the larger of its column sums' and its
+    sampled rows' largest difference, each relative to the stored array's magnitude."""
+    scale = max(float(np.max(stored[f"{name}|abs_sum"], initial=0.0)), 1e-300)
+    row_scale = max(float(np.max(np.abs(stored[f"{name}|sample"]), initial=0.0)), 1e-300)
+    sums = np.max(np.abs(stored[f"{name}|sum"] - fresh[f"{name}|sum"]), initial=0.0) / scale
+    sample = np.max(np.abs(stored[f"{name}|sample"] - fresh[f"{name}|sample"]), initial=0.0) / row_scale
+    return float(max(sums, sample))
