@@ -2,7 +2,8 @@
 
 A Redis error raised out of the task would acknowledge the job's message (late
 acknowledgement acknowledges failures too) and leave its record queued with nothing
-on the queue (seen once in CI: tests/faults, Redis killed as the worker took a job)."""
+on the queue: the likely cause of a failure seen once in CI and not reproduced since
+(tests/faults, Redis killed as the worker took the first of four queued jobs)."""
 from __future__ import annotations
 
 import redis
