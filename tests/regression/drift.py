@@ -12,15 +12,11 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
 from cases import cases
-from snapshot import fingerprint, relative_difference, run_case
-
-BASELINE = Path(__file__).with_name("baseline.npz")
-
+from snapshot import BASELINE, case_entries, fingerprint, relative_difference, run_case
 
 # An array whose stored values are all below this (SI units) holds round-off only (the stress
 # of bodies in free flight, about 1e-14 Pa): its difference relative to itself says nothing.
@@ -46,8 +42,7 @@ def main(names: list[str]) -> None:
         if names and name not in names:
             continue
         started = time.perf_counter()
-        stored = {key[len(name) + 1:]: v for key, v in stored_all.items() if key.startswith(f"{name}/")}
-        moved, array, changed = furthest(stored, fingerprint(run_case(case, reproducible=False)))
+        moved, array, changed = furthest(case_entries(stored_all, name), fingerprint(run_case(case, reproducible=False)))
         rows.append((moved, name, array, changed))
         print(f"{name}: {moved:.2e} ({array}; {changed} arrays changed) {time.perf_counter() - started:.1f} s",
               flush=True)

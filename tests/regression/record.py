@@ -8,14 +8,11 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
 from cases import cases
-from snapshot import fingerprint, run_case
-
-BASELINE = Path(__file__).with_name("baseline.npz")
+from snapshot import BASELINE, fingerprint, run_case
 
 
 def main(names: list[str]) -> None:

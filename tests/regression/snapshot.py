@@ -22,6 +22,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import os
+from pathlib import Path
 from unittest import mock
 
 import numpy as np
@@ -29,6 +30,7 @@ import numpy as np
 from solver.runner import make_simulation
 from solver.scene import load_scene
 
+BASELINE = Path(__file__).with_name("baseline.npz")
 SAMPLE_ROWS = 32
 REPRODUCIBLE = {"MPM_FMA": "0"}
 
@@ -77,6 +79,11 @@ def fingerprint(state: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         out[f"{name}|sum"] = rows.astype(np.float64).sum(axis=0)
         out[f"{name}|abs_sum"] = np.abs(rows.astype(np.float64)).sum(axis=0)
     return out
+
+
+def case_entries(baseline: dict[str, np.ndarray], name: str) -> dict[str, np.ndarray]:
+    """One case's fingerprint out of the whole baseline (its keys are `case/array|part`)."""
+    return {key[len(name) + 1:]: value for key, value in baseline.items() if key.startswith(f"{name}/")}
 
 
 def differences(stored: dict[str, np.ndarray], fresh: dict[str, np.ndarray], relative: float | None) -> list[str]:

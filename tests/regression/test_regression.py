@@ -13,15 +13,13 @@ from __future__ import annotations
 
 import json
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cases import cases
-from snapshot import differences, fingerprint, run_case
+from snapshot import BASELINE, case_entries, differences, fingerprint, run_case
 
-BASELINE = Path(__file__).with_name("baseline.npz")
 CASES = cases()
 # numpy evaluates a scene expression's sin, cos, exp, ... on arrays with SIMD code picked for
 # the CPU (AVX-512 or not), whose last bit differs between machines: a scene driven by such an
@@ -46,7 +44,7 @@ def test_every_case_has_a_baseline(baseline):
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_case_gives_the_stored_result(baseline, name):
-    stored = {key[len(name) + 1:]: value for key, value in baseline.items() if key.startswith(f"{name}/")}
+    stored = case_entries(baseline, name)
     fresh = fingerprint(run_case(CASES[name]))
     problems = differences(stored, fresh, 1e-12 if name in ROUND_OFF else None)
     assert not problems, "\n".join(problems)

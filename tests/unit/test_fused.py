@@ -250,12 +250,16 @@ def _middle_weight_through_axis(x, inv_h, cells):
     return fused._axis(3, x, 0.0, inv_h, cells)[3][1]
 
 
-@njit(fastmath={"contract"})
-def _middle_weight_contracted(x, inv_h, cells):
-    """The same weight written in a contracted function: 0.75 - t*t becomes one fused operation."""
+def _middle_weight(x, inv_h, cells):
+    """`_axis`'s middle quadratic B-spline weight (lower = 0) in plain Python, which rounds
+    t*t before the subtraction."""
     s = x * inv_h
     t = s - min(max(int(s - 0.5), 0), cells - 2) - 1.0
     return 0.75 - t * t
+
+
+# the same function compiled with contraction: 0.75 - t*t becomes one fused operation
+_middle_weight_contracted = njit(fastmath={"contract"})(_middle_weight)
 
 
 def test_the_contracted_kernels_leave_the_weights_they_call_uncontracted():
@@ -266,11 +270,7 @@ def test_the_contracted_kernels_leave_the_weights_they_call_uncontracted():
     contracted first caller still gets the product rounded before the subtraction."""
     cells, inv_h = 64, 64.0 / 0.9
     xs = np.random.default_rng(3).uniform(0.05, 0.85, 400)
-    separately = []
-    for x in xs:
-        s = x * inv_h
-        t = s - min(max(int(s - 0.5), 0), cells - 2) - 1.0
-        separately.append(0.75 - t * t)   # Python rounds the product, then the difference
+    separately = [_middle_weight(x, inv_h, cells) for x in xs]
     contracted = [_middle_weight_contracted(x, inv_h, cells) for x in xs]
     if contracted == separately:
         pytest.skip("this CPU has no fused multiply-add: nothing is contracted")
