@@ -1,12 +1,15 @@
 """The elastic-block MLS-MPM step of benchmarks/reference_mls.py in NVIDIA Warp, on its CPU device.
 
-    python mls_warp.py BLOCK.npz STEPS     -> one JSON line: particle-steps per second
+    python mls_warp.py BLOCK.npz STEPS            -> one JSON line: particle-steps per second
+    python mls_warp.py BLOCK.npz STEPS phases     -> also each kernel's best ns per particle
 
 Run by benchmarks/throughput.py in its own process. Warp runs CPU kernels on one
 thread. Same arithmetic as the numba reference: quadratic B-splines, the stress
 folded into the APIC affine momentum, neo-Hookean Kirchhoff stress, float64.
 """
+import json
 import sys
+import time
 
 import numpy as np
 import warp as wp
@@ -154,7 +157,7 @@ def g2p_3d(x: wp.array(dtype=wp.vec3d), v: wp.array(dtype=wp.vec3d), C: wp.array
     F[p] = (wp.identity(n=3, dtype=wp.float64) + dt * new_C) * F[p]
 
 
-def main(path: str, steps: int) -> None:
+def main(path: str, steps: int, phases: bool = False) -> None:
     wp.config.quiet = True
     wp.init()
     data = np.load(path)
@@ -184,7 +187,25 @@ def main(path: str, steps: int) -> None:
         wp.launch(g2p, dim=n, inputs=[x, v, C, F, grid_v, dt, inv_dx], device=device)
 
     report_rate(step, wp.synchronize, n, steps, x.numpy)
+    if phases:
+        _report_phases(n, {
+            "zero + p2g": lambda: (grid_m.zero_(), grid_v.zero_(), wp.launch(
+                p2g, dim=n, inputs=[x, v, C, F, mass, vol, grid_m, grid_v, dt, inv_dx, lam, mu], device=device)),
+            "grid": lambda: wp.launch(grid, dim=shape, inputs=[grid_m, grid_v], device=device),
+            "g2p": lambda: wp.launch(g2p, dim=n, inputs=[x, v, C, F, grid_v, dt, inv_dx], device=device)})
+
+
+def _report_phases(n: int, phases: dict, repeats: int = 10) -> None:
+    """Each kernel's best time over `repeats` steps (taken in the step's order), ns per particle."""
+    best = {name: float("inf") for name in phases}
+    for _ in range(repeats):
+        for name, launch in phases.items():
+            start = time.perf_counter()
+            launch()
+            wp.synchronize()
+            best[name] = min(best[name], time.perf_counter() - start)
+    print(json.dumps({"ns_per_particle": {name: t / n * 1e9 for name, t in best.items()}}))
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], int(sys.argv[2]))
+    main(sys.argv[1], int(sys.argv[2]), len(sys.argv) > 3 and sys.argv[3] == "phases")
