@@ -18,6 +18,9 @@ formed from F_p, dt f_I in the momentum), on the same state:
 Part 2, G2P: the solver's own generated G2P (USL, MLS), compiled twice from the same text,
 without and with numba's SLP vectorizer (numba.config.SLP_VECTORIZE, off by default), and the
 P2G likewise.
+Part 3, G2P in two passes on flat views of the arrays, as LLVM's loop vectorizer would need
+it across particles: a gather of v_p and C_p that only reads x_p, then x_p, F_p and V_p (the
+same results to round-off). `--remarks` prints LLVM's loop-vectorizer remarks while they compile.
 
 --alone: one stepper's rate in a process of its own, timed as benchmarks/frameworks/timing.py
 times Taichi and Warp (three untimed steps, the best of three runs of 15 steps), where
@@ -38,6 +41,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import llvmlite.binding as llvm  # noqa: E402
 import numba  # noqa: E402
 from numba import njit  # noqa: E402
 
@@ -194,13 +198,7 @@ def part_slp(sim, repeats: int) -> None:
     text = fused_template.source(2, stress=_lines(sim))
     plain, slp = _module("fused_plain", text), _module("fused_slp", text, slp=True)
     variant = ph._g2p_variants[fused.USL, True, False]
-    state = {name: getattr(p, name).copy() for name in ("x", "v", "F", "volume")}
-    affine = ph._affine_matrix.copy()
-
-    def restore():
-        for name, a in state.items():
-            getattr(p, name)[...] = a
-        ph._affine_matrix[...] = affine
+    restore = _restorer(sim)
 
     def g2p(module):
         module.g2p(variant, p.x, p.v, ph._affine_matrix, p.mass, p.stored("L"), p.F, p.volume, p.volume0, sim.rate,
@@ -220,6 +218,94 @@ def part_slp(sim, repeats: int) -> None:
     _print("P2G (folded MLS), the solver's generated kernel", _timed(
         {"SLP off (numba's default)": lambda: p2g(plain), "SLP on": lambda: p2g(slp)}, p.count, repeats, g.reset))
     restore()
+
+
+TWO_PASSES = '''
+@njit(parallel=True, fastmath={{"contract"}})
+def gather(x, v, C, v_new, lower0, lower1, inv_h0, inv_h1, h0, h1, cells0, cells1, stride1, offset, d_inv0, d_inv1,
+           bounds):
+    for t in prange(1):
+        for p in range(bounds[t], bounds[t + 1]):
+            s0, s1 = (x[2 * p] - lower0) * inv_h0, (x[2 * p + 1] - lower1) * inv_h1
+            ix, iy = min(max(np.int64(s0 - 0.5), 0), cells0 - 2), min(max(np.int64(s1 - 0.5), 0), cells1 - 2)
+            fx, fy = s0 - ix, s1 - iy
+            wx0, wx1, wx2 = 0.5 * ((1.5 - fx) * (1.5 - fx)), 0.75 - (fx - 1.0) * (fx - 1.0), 0.5 * ((fx - 0.5) * (fx - 0.5))
+            wy0, wy1, wy2 = 0.5 * ((1.5 - fy) * (1.5 - fy)), 0.75 - (fy - 1.0) * (fy - 1.0), 0.5 * ((fy - 0.5) * (fy - 0.5))
+            wdx0, wdx1, wdx2 = wx0 * ((0 - fx) * h0), wx1 * ((1 - fx) * h0), wx2 * ((2 - fx) * h0)
+            base = iy * stride1 - offset + ix
+            vpx = vpy = b00 = b01 = b10 = b11 = 0.0
+{rows}
+            v[2 * p], v[2 * p + 1] = vpx, vpy
+            C[4 * p], C[4 * p + 1] = b00 * d_inv0, b01 * d_inv1
+            C[4 * p + 2], C[4 * p + 3] = b10 * d_inv0, b11 * d_inv1
+
+
+@njit(parallel=True, fastmath={{"contract"}})
+def update(x, v, C, F, volume, volume0, dt, bounds, bad):
+    for t in prange(1):
+        nbad = 0
+        for p in range(bounds[t], bounds[t + 1]):
+            x[2 * p] += dt * v[2 * p]
+            x[2 * p + 1] += dt * v[2 * p + 1]
+            l00, l01, l10, l11 = C[4 * p], C[4 * p + 1], C[4 * p + 2], C[4 * p + 3]
+            f00, f01, f10, f11 = F[4 * p], F[4 * p + 1], F[4 * p + 2], F[4 * p + 3]
+            n00 = f00 + dt * l00 * f00 + dt * l01 * f10
+            n01 = f01 + dt * l00 * f01 + dt * l01 * f11
+            n10 = f10 + dt * l10 * f00 + dt * l11 * f10
+            n11 = f11 + dt * l10 * f01 + dt * l11 * f11
+            F[4 * p], F[4 * p + 1], F[4 * p + 2], F[4 * p + 3] = n00, n01, n10, n11
+            J = n00 * n11 - n01 * n10
+            volume[p] = J * volume0[p]
+            nbad += np.int64(J <= 0.0)
+        bad[t] = nbad
+'''
+ROW = """            dy = ({j} - fy) * h1
+            row = base + {j} * stride1
+            vx0, vy0, vx1, vy1 = v_new[2 * row], v_new[2 * row + 1], v_new[2 * row + 2], v_new[2 * row + 3]
+            vx2, vy2 = v_new[2 * row + 4], v_new[2 * row + 5]
+            sx, sy = (wx0 * vx0 + wx1 * vx1) + wx2 * vx2, (wx0 * vy0 + wx1 * vy1) + wx2 * vy2
+            tx, ty = (wdx0 * vx0 + wdx1 * vx1) + wdx2 * vx2, (wdx0 * vy0 + wdx1 * vy1) + wdx2 * vy2
+            vpx, vpy = vpx + wy{j} * sx, vpy + wy{j} * sy
+            b00, b10 = b00 + wy{j} * tx, b10 + wy{j} * ty
+            b01, b11 = b01 + (wy{j} * dy) * sx, b11 + (wy{j} * dy) * sy"""
+
+
+def part_two_passes(sim, repeats: int) -> None:
+    ph, p, g, f = sim.phases, sim.particles, sim.grid, sim.frame
+    two = _module("g2p_two_passes", TWO_PASSES.format(rows="\n".join(ROW.format(j=j) for j in range(3))))
+    one = _module("fused_plain", fused_template.source(2, stress=_lines(sim)))
+    variant = ph._g2p_variants[fused.USL, True, False]
+    x, v, C, F = (a.reshape(-1) for a in (p.x, p.v, ph._affine_matrix, p.F))
+    bounds, bad = np.array([0, p.count]), np.zeros(1, dtype=np.int64)
+    restore = _restorer(sim)
+    calls = {
+        "one pass (the solver's)": lambda: one.g2p(
+            variant, p.x, p.v, ph._affine_matrix, p.mass, p.stored("L"), p.F, p.volume, p.volume0, sim.rate,
+            ph._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, MLS_DT, ph._d_inv, sim.copies.momentum,
+            p.stored("stress"), ph._stress_parameters, ph._bad),
+        "two passes: gather": lambda: two.gather(
+            x, v, C, g.v_new.reshape(-1), f.lower[0], f.lower[1], f.inv_h[0], f.inv_h[1], f.h[0], f.h[1], f.cells[0],
+            f.cells[1], f.strides[1], f.offset, ph._d_inv[0], ph._d_inv[1], bounds),
+        "two passes: update": lambda: two.update(x, v, C, F, p.volume, p.volume0, MLS_DT, bounds, bad)}
+    for call in calls.values():
+        restore()
+        call()
+    restore()
+    _print("G2P (USL, MLS) in one pass and in two", _timed(calls, p.count, repeats, restore))
+    restore()
+
+
+def _restorer(sim):
+    """A function that puts the particles' x, v, F, V and C_p back as they are now."""
+    p, ph = sim.particles, sim.phases
+    state = {name: getattr(p, name).copy() for name in ("x", "v", "F", "volume")}
+    affine = ph._affine_matrix.copy()
+
+    def restore():
+        for name, a in state.items():
+            getattr(p, name)[...] = a
+        ph._affine_matrix[...] = affine
+    return restore
 
 
 def _lines(sim):
@@ -246,6 +332,7 @@ def alone(case: str, who: str) -> float:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=11)
+    parser.add_argument("--remarks", action="store_true", help="print LLVM's loop-vectorizer remarks (part 3)")
     parser.add_argument("--alone", nargs=2, metavar=("CASE", "STEPPER"), help="2d or mpm88; solver or numba")
     args = parser.parse_args()
     numba.set_num_threads(1)
@@ -261,6 +348,10 @@ def main() -> int:
     print(f"2D MLS block, {sim.particles.count:,} particles, one thread")
     part_p2g(sim, args.repeats)
     part_slp(sim, args.repeats)
+    if args.remarks:
+        llvm.set_option("", "-pass-remarks=loop-vectorize")
+        llvm.set_option("", "-pass-remarks-analysis=loop-vectorize")
+    part_two_passes(sim, args.repeats)
     return 0
 
 
