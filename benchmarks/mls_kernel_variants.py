@@ -3,6 +3,7 @@ seventeenth part): where the P2G's time goes, and what numba's SLP vectorizer do
 
     python benchmarks/mls_kernel_variants.py [--repeats 11]
     python benchmarks/mls_kernel_variants.py --alone {2d,mpm88} {solver,numba}
+    python benchmarks/mls_kernel_variants.py --save-block block.npz   # for frameworks/mls_warp.py ... phases
 
 On the 2D neo-Hookean block of benchmarks/throughput.py (225 x 225 cells, 129,600 particles,
 quadratic B-splines, MLS, USL), one thread, the state after three steps. Prints ns per particle,
@@ -313,6 +314,13 @@ def _lines(sim):
     return _material_lines(sim, sim.phases._stress_model, "stress_lines")
 
 
+def save_block(path: Path) -> None:
+    """The 2D block's state as throughput.py saves it for the frameworks' scripts."""
+    sim = ExplicitMPM(load_scene(mls_block_scene(2, 225, 1, "mls")))
+    p, model = sim.particles, sim.materials[0][0]
+    np.savez(path, x=p.x, v=p.v, mass=p.mass, volume=p.volume, cells=225, lam=model.lam, mu=model.mu, dt=MLS_DT)
+
+
 def alone(case: str, who: str) -> float:
     """M particle-steps/s of the solver's MLS step or of the numba reference, alone in this process."""
     if case == "2d":
@@ -333,9 +341,14 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=11)
     parser.add_argument("--remarks", action="store_true", help="print LLVM's loop-vectorizer remarks (part 3)")
+    parser.add_argument("--save-block", type=Path, metavar="NPZ",
+                        help="write the 2D block's particles as throughput.py hands them to Taichi and Warp, and stop")
     parser.add_argument("--alone", nargs=2, metavar=("CASE", "STEPPER"), help="2d or mpm88; solver or numba")
     args = parser.parse_args()
     numba.set_num_threads(1)
+    if args.save_block:
+        save_block(args.save_block)
+        return 0
     if args.alone:
         case, who = args.alone
         if case not in ("2d", "mpm88") or who not in ("solver", "numba"):
