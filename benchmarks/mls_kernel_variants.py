@@ -22,6 +22,9 @@ P2G likewise.
 Part 3, G2P in two passes on flat views of the arrays, as LLVM's loop vectorizer would need
 it across particles: a gather of v_p and C_p that only reads x_p, then x_p, F_p and V_p (the
 same results to round-off). `--remarks` prints LLVM's loop-vectorizer remarks while they compile.
+Part 4, the G2P's particle update put off into the next P2G: whole steps of the solver with its
+generated kernels, and with kernels whose G2P stops after v_p and C_p and whose P2G first moves
+x_p and updates F_p and V_p (the same bits: checked after five steps, the update pending).
 
 --alone: one stepper's rate in a process of its own, timed as benchmarks/frameworks/timing.py
 times Taichi and Warp (three untimed steps, the best of three runs of 15 steps), where
@@ -296,6 +299,46 @@ def part_two_passes(sim, repeats: int) -> None:
     restore()
 
 
+DEFERRED_UPDATE = """            if inline:   # the last G2P's particle update, put off until now
+                x[p, 0] += dt * v[p, 0]
+                x[p, 1] += dt * v[p, 1]
+                l00, l01, l10, l11 = C[p, 0, 0], C[p, 0, 1], C[p, 1, 0], C[p, 1, 1]
+                f00, f01, f10, f11 = F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1]
+                n00 = f00 + dt * l00 * f00 + dt * l01 * f10
+                n01 = f01 + dt * l00 * f01 + dt * l01 * f11
+                n10 = f10 + dt * l10 * f00 + dt * l11 * f10
+                n11 = f11 + dt * l10 * f01 + dt * l11 * f11
+                F[p, 0, 0], F[p, 0, 1], F[p, 1, 0], F[p, 1, 1] = n00, n01, n10, n11
+                volume[p] = (n00 * n11 - n01 * n10) * volume0[p]
+"""
+STRESS_IN_P2G = "            if inline:   # the material's stress pass was put off: sigma_p as it computes it\n"
+USL_MOVE = """            if mode == USL:
+                x[p, 0] += dt * vpx"""
+
+
+def part_deferred(steps: int = 15, repeats: int = 5) -> None:
+    sims = {name: ExplicitMPM(load_scene(mls_block_scene(2, 225, 1, "mls"))) for name in ("generated", "deferred")}
+    text = fused_template.source(2, stress=_lines(sims["generated"]))
+    if STRESS_IN_P2G not in text or USL_MOVE not in text:
+        raise SystemExit("part 4: the template's text changed; update DEFERRED_UPDATE's anchors")
+    deferred = text.replace(STRESS_IN_P2G, DEFERRED_UPDATE + STRESS_IN_P2G, 1).replace(
+        USL_MOVE, "            if mode == USL and l_is_c:\n                continue\n" + USL_MOVE, 1)
+    sims["generated"].phases._kernels = _module("fused_generated", text)
+    sims["deferred"].phases._kernels = _module("fused_deferred", deferred)
+    for sim in sims.values():
+        for _ in range(5):
+            sim.advance(MLS_DT)
+    a, b = sims["generated"].particles, sims["deferred"].particles
+    same = np.array_equal(a.x, b.x + MLS_DT * b.v) and np.array_equal(a.v, b.v)
+    rates = {name: [] for name in sims}
+    for _ in range(repeats):
+        for name, sim in sims.items():
+            rates[name].append(rate(sim, a.count, steps, MLS_DT) / 1e6)
+    print(f"whole steps, M particle-steps/s (x, v the same bits, the update pending: {same})")
+    for name, r in rates.items():
+        print(f"  {name:<28} best {max(r):6.2f}   median {np.median(r):6.2f}")
+
+
 def _restorer(sim):
     """A function that puts the particles' x, v, F, V and C_p back as they are now."""
     p, ph = sim.particles, sim.phases
@@ -365,6 +408,7 @@ def main() -> int:
         llvm.set_option("", "-pass-remarks=loop-vectorize")
         llvm.set_option("", "-pass-remarks-analysis=loop-vectorize")
     part_two_passes(sim, args.repeats)
+    part_deferred()
     return 0
 
 
