@@ -54,7 +54,8 @@ from solver.scene import load_scene  # noqa: E402
 from solver.step.fused import _material_lines  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 from reference_mls import ReferenceMLS, ReferenceMPM88  # noqa: E402
-from throughput import MLS_DT, MPM88_BULK, MPM88_DT, MPM88_GRAVITY, mls_block_scene, mpm88_scene, rate  # noqa: E402
+from throughput import (MLS_DT, MPM88_BULK, MPM88_DT, MPM88_GRAVITY, mls_block_scene, mpm88_scene, rate,  # noqa: E402
+                        save_mls_block)
 
 LG = (6.666666666666735130e-01, 3.999999999940941908e-01, 2.857142874366239149e-01, 2.222219843214978396e-01,
       1.818357216161805012e-01, 1.531383769920937332e-01, 1.479819860511658591e-01)
@@ -197,17 +198,22 @@ def _apply_inline_log(values):
     return out
 
 
-def part_slp(sim, repeats: int) -> None:
+def _generated_g2p(sim, module) -> None:
+    """The USL G2P of a module of generated kernels on the sim's state, as FusedPhases calls it."""
     ph, p, g = sim.phases, sim.particles, sim.grid
-    text = fused_template.source(2, stress=_lines(sim))
-    plain, slp = _module("fused_plain", text), _module("fused_slp", text, slp=True)
-    variant = ph._g2p_variants[fused.USL, True, False]
+    module.g2p(ph._g2p_variants[fused.USL, True, False], p.x, p.v, ph._affine_matrix, p.mass, p.stored("L"), p.F,
+               p.volume, p.volume0, sim.rate, ph._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, MLS_DT,
+               ph._d_inv, sim.copies.momentum, p.stored("stress"), ph._stress_parameters, ph._bad)
+
+
+def part_slp(sim, plain, repeats: int) -> None:
+    """`plain`: the generated kernels compiled as numba does by default (shared with parts 3, 4)."""
+    ph, p, g = sim.phases, sim.particles, sim.grid
+    slp = _module("fused_slp", fused_template.source(2, stress=_lines(sim)), slp=True)
     restore = _restorer(sim)
 
     def g2p(module):
-        module.g2p(variant, p.x, p.v, ph._affine_matrix, p.mass, p.stored("L"), p.F, p.volume, p.volume0, sim.rate,
-                   ph._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, MLS_DT, ph._d_inv, sim.copies.momentum,
-                   p.stored("stress"), ph._stress_parameters, ph._bad)
+        _generated_g2p(sim, module)
 
     def p2g(module):
         c = sim.copies
@@ -274,19 +280,14 @@ ROW = """            dy = ({j} - fy) * h1
             b01, b11 = b01 + (wy{j} * dy) * sx, b11 + (wy{j} * dy) * sy"""
 
 
-def part_two_passes(sim, repeats: int) -> None:
+def part_two_passes(sim, plain, repeats: int) -> None:
     ph, p, g, f = sim.phases, sim.particles, sim.grid, sim.frame
     two = _module("g2p_two_passes", TWO_PASSES.format(rows="\n".join(ROW.format(j=j) for j in range(3))))
-    one = _module("fused_plain", fused_template.source(2, stress=_lines(sim)))
-    variant = ph._g2p_variants[fused.USL, True, False]
     x, v, C, F = (a.reshape(-1) for a in (p.x, p.v, ph._affine_matrix, p.F))
     bounds, bad = np.array([0, p.count]), np.zeros(1, dtype=np.int64)
     restore = _restorer(sim)
     calls = {
-        "one pass (the solver's)": lambda: one.g2p(
-            variant, p.x, p.v, ph._affine_matrix, p.mass, p.stored("L"), p.F, p.volume, p.volume0, sim.rate,
-            ph._frame, g.v_old, g.v_new, g.momentum, sim.flip_ratio, MLS_DT, ph._d_inv, sim.copies.momentum,
-            p.stored("stress"), ph._stress_parameters, ph._bad),
+        "one pass (the solver's)": lambda: _generated_g2p(sim, plain),
         "two passes: gather": lambda: two.gather(
             x, v, C, g.v_new.reshape(-1), f.lower[0], f.lower[1], f.inv_h[0], f.inv_h[1], f.h[0], f.h[1], f.cells[0],
             f.cells[1], f.strides[1], f.offset, ph._d_inv[0], ph._d_inv[1], bounds),
@@ -316,14 +317,14 @@ USL_MOVE = """            if mode == USL:
                 x[p, 0] += dt * vpx"""
 
 
-def part_deferred(steps: int = 15, repeats: int = 5) -> None:
+def part_deferred(plain, steps: int = 15, repeats: int = 5) -> None:
     sims = {name: ExplicitMPM(load_scene(mls_block_scene(2, 225, 1, "mls"))) for name in ("generated", "deferred")}
     text = fused_template.source(2, stress=_lines(sims["generated"]))
     if STRESS_IN_P2G not in text or USL_MOVE not in text:
         raise SystemExit("part 4: the template's text changed; update DEFERRED_UPDATE's anchors")
     deferred = text.replace(STRESS_IN_P2G, DEFERRED_UPDATE + STRESS_IN_P2G, 1).replace(
         USL_MOVE, "            if mode == USL and l_is_c:\n                continue\n" + USL_MOVE, 1)
-    sims["generated"].phases._kernels = _module("fused_generated", text)
+    sims["generated"].phases._kernels = plain
     sims["deferred"].phases._kernels = _module("fused_deferred", deferred)
     for sim in sims.values():
         for _ in range(5):
@@ -360,8 +361,8 @@ def _lines(sim):
 def save_block(path: Path) -> None:
     """The 2D block's state as throughput.py saves it for the frameworks' scripts."""
     sim = ExplicitMPM(load_scene(mls_block_scene(2, 225, 1, "mls")))
-    p, model = sim.particles, sim.materials[0][0]
-    np.savez(path, x=p.x, v=p.v, mass=p.mass, volume=p.volume, cells=225, lam=model.lam, mu=model.mu, dt=MLS_DT)
+    p = sim.particles
+    save_mls_block(path, p.x, p.v, p, 225, sim.materials[0][0])
 
 
 def alone(case: str, who: str) -> float:
@@ -403,12 +404,13 @@ def main() -> int:
         sim.advance(MLS_DT)
     print(f"2D MLS block, {sim.particles.count:,} particles, one thread")
     part_p2g(sim, args.repeats)
-    part_slp(sim, args.repeats)
+    plain = _module("fused_plain", fused_template.source(2, stress=_lines(sim)))
+    part_slp(sim, plain, args.repeats)
     if args.remarks:
         llvm.set_option("", "-pass-remarks=loop-vectorize")
         llvm.set_option("", "-pass-remarks-analysis=loop-vectorize")
-    part_two_passes(sim, args.repeats)
-    part_deferred()
+    part_two_passes(sim, plain, args.repeats)
+    part_deferred(plain)
     return 0
 
 

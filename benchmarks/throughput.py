@@ -136,10 +136,15 @@ def side_by_side(dim: int, cells: int, threads: int, steps: int, python: str, wa
     best = _alternate({**steppers, "numba": reference}, threads, steps, MLS_DT, n)
     with tempfile.TemporaryDirectory() as tmp:
         block = Path(tmp) / "block.npz"
-        np.savez(block, x=start_x, v=start_v, mass=p.mass, volume=p.volume, cells=cells, lam=model.lam,
-                 mu=model.mu, dt=MLS_DT)
+        save_mls_block(block, start_x, start_v, p, cells, model)
         best |= _frameworks("mls", block, threads, steps, python, warp_rate, (dim, cells))
     return {"case": f"{dim}D block", "dimension": dim, "particles": n, "threads": threads, **best}
+
+
+def save_mls_block(path: Path, x: np.ndarray, v: np.ndarray, particles, cells: int, model) -> None:
+    """The block's state as the frameworks' scripts read it (frameworks/mls_*.py)."""
+    np.savez(path, x=x, v=v, mass=particles.mass, volume=particles.volume, cells=cells, lam=model.lam,
+             mu=model.mu, dt=MLS_DT)
 
 
 def side_by_side_mpm88(threads: int, steps: int, python: str, warp_rate: dict) -> dict:
