@@ -1,5 +1,6 @@
-"""Variants of the 2D MLS kernels that were measured and not kept (docs/benchmarks.md, issue 18
-seventeenth part): where the P2G's time goes, and what numba's SLP vectorizer does to them.
+"""Variants of the 2D MLS kernels that were measured (docs/benchmarks.md, issue 18, seventeenth and
+eighteenth parts): where the P2G's time goes, what numba's SLP vectorizer does to them, and the
+vectorised G2P the solver keeps.
 
     python benchmarks/mls_kernel_variants.py [--repeats 11]
     python benchmarks/mls_kernel_variants.py --alone {2d,mpm88} {solver,numba}
@@ -25,6 +26,10 @@ same results to round-off). `--remarks` prints LLVM's loop-vectorizer remarks wh
 Part 4, the G2P's particle update put off into the next P2G: whole steps of the solver with its
 generated kernels, and with kernels whose G2P stops after v_p and C_p and whose P2G first moves
 x_p and updates F_p and V_p (the same bits: checked after five steps, the update pending).
+Part 5, the solver's two USL G2P kernels for MLS, from the same generated text: `g2p` (one
+scalar pass, as parts 2-4 call it) and `g2p_mls` (the loop LLVM vectorises: solver/fused_template.py
+`_g2p_mls`), with the number of AVX-512 gathers in each one's code, and whether the particles
+come out the same bits.
 
 --alone: one stepper's rate in a process of its own, timed as benchmarks/frameworks/timing.py
 times Taichi and Warp (three untimed steps, the best of three runs of 15 steps), where
@@ -326,6 +331,8 @@ def part_deferred(plain, steps: int = 15, repeats: int = 5) -> None:
         USL_MOVE, "            if mode == USL and l_is_c:\n                continue\n" + USL_MOVE, 1)
     sims["generated"].phases._kernels = plain
     sims["deferred"].phases._kernels = _module("fused_deferred", deferred)
+    for sim in sims.values():   # both on the one-pass g2p, which the deferred variant changes (not g2p_mls)
+        sim.phases._splits_mls_g2p = lambda: False
     for sim in sims.values():
         for _ in range(5):
             sim.advance(MLS_DT)
@@ -338,6 +345,29 @@ def part_deferred(plain, steps: int = 15, repeats: int = 5) -> None:
     print(f"whole steps, M particle-steps/s (x, v the same bits, the update pending: {same})")
     for name, r in rates.items():
         print(f"  {name:<28} best {max(r):6.2f}   median {np.median(r):6.2f}")
+
+
+def part_vectorised(sim, plain, repeats: int) -> None:
+    ph, p, g = sim.phases, sim.particles, sim.grid
+    from solver.step.fused import _flat
+
+    def vectorised():
+        plain.g2p_mls(*_flat(p.x, p.v, ph._affine_matrix, p.F, g.v_new), p.volume, p.volume0, *ph._frame,
+                      ph._d_inv, MLS_DT, 1, ph._bad)
+    restore = _restorer(sim)
+    results = []
+    for call in (lambda: _generated_g2p(sim, plain), vectorised):
+        restore()
+        call()
+        results.append([a.copy() for a in (p.x, p.v, p.F, p.volume, ph._affine_matrix)])
+    restore()
+    same = all(np.array_equal(a, b) for a, b in zip(*results))
+    gathers = {name: "\n".join(kernel.inspect_asm().values()).count("vgather")
+               for name, kernel in (("g2p", plain.g2p), ("g2p_mls", plain.g2p_mls))}
+    _print(f"G2P (USL, MLS): the solver's two kernels (gather instructions {gathers}; the same bits: {same})",
+           _timed({"g2p (one scalar pass)": lambda: _generated_g2p(sim, plain), "g2p_mls (vectorised)": vectorised},
+                  p.count, repeats, restore))
+    restore()
 
 
 def _restorer(sim):
@@ -411,6 +441,7 @@ def main() -> int:
         llvm.set_option("", "-pass-remarks-analysis=loop-vectorize")
     part_two_passes(sim, plain, args.repeats)
     part_deferred(plain)
+    part_vectorised(sim, plain, args.repeats)
     return 0
 
 

@@ -14,8 +14,9 @@ step gives the general step's answer to round-off (tests/unit/test_fused.py):
            -> nodal velocity -> g2p, mode KINEMATICS (L, F, V from the remapped
            velocity; x) -> material
 
-`kernels(dim)` gives the module with the two kernels, `p2g` and `g2p`, for a
-dimension: they are written out from one template (solver/fused_template.py)
+`kernels(dim)` gives the module with the two kernels, `p2g` and `g2p` (in 2D also
+`g2p_mls`, MLS's USL pass vectorised), for a dimension: they are written out from one
+template (solver/fused_template.py)
 into a generated, cached source file. This module keeps what every dimension
 shares: which scenes they serve (`supports`), the weights along one axis
 (`_axis`), the constants below, and APIC's D_p^-1 from the shape function
@@ -118,8 +119,14 @@ def _axis(S, x, lower, inv_h, cells):
     ok = s >= 0.5 - _TOUCH and s <= cells - 0.5 + _TOUCH
     i = min(max(int(s - 0.5), 0), cells - 2) if ok else 0
     f = s - i
-    return (ok, i, f, (0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2),
-            (-(1.5 - f) * inv_h, -2.0 * (f - 1.0) * inv_h, (f - 0.5) * inv_h))
+    return ok, i, f, _quadratic(f), (-(1.5 - f) * inv_h, -2.0 * (f - 1.0) * inv_h, (f - 0.5) * inv_h)
+
+
+@njit(cache=True, fastmath=False)
+def _quadratic(f):
+    """The quadratic B-spline's weights on the nodes at -f, 1 - f, 2 - f cells (a function of its
+    own so that the vectorised G2P calls the very expressions `_axis` does, uncontracted)."""
+    return 0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2
 
 
 @njit(cache=True)

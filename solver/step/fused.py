@@ -69,6 +69,8 @@ class FusedPhases(Phases):
                               for fold in (False, True) for inline in (False, True)}
         model = self._stress_model
         self._stress_parameters = model.stress_parameters() if model is not None else np.zeros(0)
+        # MLS's USL pass as `g2p_mls` (2D, no conduction or contact: the modules that have it; no FLIP blend)
+        self._has_g2p_mls = hasattr(self._kernels, "g2p_mls") and sim.flip_ratio == 0.0
         self._g2p_variants = {(mode, l_is_c, updates): (self._support, fused.constant(mode), affine, blend, mls,
                                                         fused.constant(l_is_c), fused.constant(updates))
                               for mode in (fused.USL, fused.REMAP, fused.KINEMATICS) for l_is_c in (False, True)
@@ -174,13 +176,30 @@ class FusedPhases(Phases):
         # (where the stress is formed in P2G, no material reads it at each step)
         l_is_c = mode == fused.USL and sim.affine is not None and sim.affine.mls and self.forms_stress()
         updates = mode != fused.REMAP and self.updates_stress()
+        if l_is_c and not updates and self._splits_mls_g2p():
+            self._kernels.g2p_mls(*_flat(p.x, p.v, self._affine_matrix, p.F, g.v_new), p.volume, p.volume0,
+                                  *self._frame, self._d_inv, dt, sim.copies.momentum.shape[0] + 1, bad)
+        else:
+            self._g2p_kernel(dt, mode, l_is_c, updates)
+        if l_is_c:
+            p.defer("L", lambda: np.copyto(p.stored("L"), self._affine_matrix))
+        sim.check_inversion(first_of(bad))
+
+    def _splits_mls_g2p(self) -> bool:
+        """Whether MLS's USL pass (C_p as L_p, no stress update) runs as `g2p_mls`, the gather
+        LLVM vectorises (solver/fused_template.py `_g2p_mls`; the same bits as `g2p`): where the
+        module has it and the arrays are C-contiguous (it takes flat views of them)."""
+        p = self.sim.particles
+        return self._has_g2p_mls and all(a.flags.c_contiguous for a in (p.x, p.v, self._affine_matrix, p.F,
+                                                                         self.sim.grid.v_new))
+
+    def _g2p_kernel(self, dt: float, mode: int, l_is_c: bool, updates: bool) -> None:
+        sim = self.sim
+        p, g, bad = sim.particles, sim.grid, self._bad
         self._kernels.g2p(self._g2p_variants[mode, l_is_c, updates], p.x, p.v, self._affine_matrix, p.mass,
                           p.stored("L"), p.F, p.volume, p.volume0, sim.rate, self._frame, g.v_old, g.v_new, g.momentum,
                           sim.flip_ratio, dt, self._d_inv, sim.copies.momentum, p.stored("stress"),
                           self._stress_parameters, bad, *self._heat_g2p(mode), *self._contact_g2p())
-        if l_is_c:
-            p.defer("L", lambda: np.copyto(p.stored("L"), self._affine_matrix))
-        sim.check_inversion(first_of(bad))
 
     # -- conduction (nothing without it) ----------------------------------------------------
 
@@ -247,3 +266,8 @@ def _material_lines(sim, model, kind: str) -> tuple | None:
         return None
     return (next(iter(sim.scene.materials.values())).model, getattr(model, kind)(sim.scene.dimension),
             len(model.stress_parameters()))
+
+
+def _flat(*arrays: np.ndarray) -> tuple:
+    """Views of C-contiguous arrays as one row (no copy: the kernel writes through them)."""
+    return tuple(a.reshape(-1) for a in arrays)

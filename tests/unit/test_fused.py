@@ -13,6 +13,7 @@ from __future__ import annotations
 import copy
 from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ from numba import njit
 
 from solver import fused, fused_template, generated, shape
 from solver.scene import load_scene
-from solver.stepper import ExplicitMPM
+from solver.stepper import ExplicitMPM, Instability
 
 TOLERANCE = 1e-12
 STEPS = 60
@@ -238,7 +239,7 @@ def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(mon
     monkeypatch.delenv(fused_template.FMA, raising=False)   # the default
     assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
     monkeypatch.setenv(fused_template.FMA, "1")
-    assert fused_template.source(2).count(decorator) == 2
+    assert fused_template.source(2).count(decorator) == 3   # p2g, g2p and g2p_mls
     monkeypatch.setenv(fused_template.FMA, "yes")
     with pytest.raises(ValueError, match="MPM_FMA='yes': must be 0"):
         fused_template.source(2)
@@ -580,3 +581,77 @@ def test_contracted_kernels_give_the_reproducible_ones_to_round_off(material, di
     assert np.abs(exact.particles.stress).max() > 1.0   # (the bodies have collided)
     for name in ("x", "v", "F", "stress", "volume"):
         assert relative_difference(getattr(contracted.particles, name), getattr(exact.particles, name)) <= TOLERANCE, name
+
+
+# -- MLS's USL pass in two loops, the gather vectorised (2D) ------------------------------------
+
+@pytest.mark.parametrize("material,threads,contract", [
+    (NEO_HOOKEAN, 1, "1"), (NEO_HOOKEAN, 2, "0"), (FLUID, 2, "1"), (LINEAR_FLUID, 1, "0")])
+def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material, threads, contract, monkeypatch):
+    """`g2p_mls` sums the same products in the same order as `g2p` does with l_is_c (the rows of
+    the stencil in `_stencil`'s order, the x weights from `_quadratic`, uncontracted), so the state
+    after STEPS steps is the same bits, with FMA contraction (the default) and without."""
+    monkeypatch.setenv(fused_template.FMA, contract)
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
+    split, one_pass = stepped_with_and_without(scene, "_splits_mls_g2p")
+    calls = []
+    kernel = split.phases._kernels.g2p_mls
+    split.phases._kernels = SimpleNamespace(**vars(split.phases._kernels))
+    split.phases._kernels.g2p_mls = lambda *args: calls.append(kernel(*args))
+    split.advance(2e-4)
+    one_pass.advance(2e-4)
+    assert len(calls) == 1
+    for name in ("x", "v", "F", "L", "stress", "volume"):
+        assert np.array_equal(getattr(split.particles, name), getattr(one_pass.particles, name)), name
+
+
+@pytest.mark.parametrize("change", [
+    {"dimension": 3},                                          # scalar gathers are faster in 3D
+    {"method": METHODS["musl-quadratic-mls"]},                 # MUSL's passes
+    {"method": {**METHODS["usl-quadratic-mls"], "transfer": "apic"}},
+    {"materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1e4, "poisson_ratio": 0.3}}},
+])
+def test_the_vectorised_mls_pass_runs_only_for_mls_under_usl_in_2d(change):
+    """It replaces the one-pass kernel only where that one would not write L_p (MLS, USL, the stress
+    formed in P2G) nor update the stress, in 2D: elsewhere the scene keeps `g2p`."""
+    base = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"]}
+    base["materials"]["m"] = NEO_HOOKEAN
+    sim = ExplicitMPM(load_scene(base))
+    assert sim.phases._splits_mls_g2p()
+    if change.get("dimension") == 3:
+        other = {**copy.deepcopy(SCENE_3D), "method": METHODS["usl-quadratic-mls"]}
+        other["materials"]["m"] = NEO_HOOKEAN
+    else:
+        other = {**base, **change}
+    sim = ExplicitMPM(load_scene(other))
+    calls = []
+    sim.phases._kernels = SimpleNamespace(**vars(sim.phases._kernels))
+    sim.phases._kernels.g2p_mls = lambda *args: calls.append(args)
+    sim.advance(2e-4)
+    assert calls == []
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_vectorised_mls_pass_names_the_first_inverted_particle_as_the_one_pass_kernel(threads):
+    """The vectorised loop counts the particles whose J = det F is not positive and looks for the
+    first one afterwards: the step fails naming the particle `g2p` names (with two threads the
+    first of the first block that has one). The fluid's stress reads V_p / V0_p, not F_p, so the
+    F_p turned over here reaches G2P finite."""
+    scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
+    scene["materials"]["m"] = LINEAR_FLUID
+    named = []
+    for split in (True, False):
+        sim = ExplicitMPM(load_scene(scene))
+        if not split:
+            sim.phases._splits_mls_g2p = lambda: False
+        sim.advance(2e-4)
+        assert sim.phases._splits_mls_g2p() is split
+        n = sim.particles.count
+        for p in (n - 4, n - 2, n // 3):   # in the last block, and one earlier (the first block with two threads)
+            sim.particles.F[p] = [[-1.0, 0.0], [0.0, 1.0]]
+        with pytest.raises(Instability, match="J = det F") as failure:
+            sim.advance(2e-4)
+        named.append(failure.value.particle_id)
+    assert named == [int(sim.particles.id[n // 3])] * 2
