@@ -52,7 +52,9 @@ class EmbeddedRedis:
         return "\n".join([
             "bind 127.0.0.1", f"port {self.port}", "protected-mode yes",
             f"requirepass {self.password}", "daemonize no", f"dir {self.dir}",
-            "appendonly yes", "appendfsync everysec", 'save ""',
+            # always: with everysec Redis may answer before writing the file (while the last
+            # second's fsync runs), and a kill -9 then loses the writes (docs/reliability.md)
+            "appendonly yes", "appendfsync always", 'save ""',
             "loglevel warning", "logfile redis.log", "",
         ])
 

@@ -1,6 +1,7 @@
 """docker-compose.yml parses (there is no Docker engine here to run it)."""
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -29,6 +30,7 @@ def test_compose_file_parses_with_redis_api_and_scalable_workers():
     config = subprocess.run([*_compose(), "-f", str(ROOT / "docker-compose.yml"), "config"],
                             capture_output=True, text=True, cwd=ROOT).stdout
     assert "appendonly" in config and "results:/data" in config
+    assert re.search(r"appendfsync\W+always", config)   # as the embedded one (docs/reliability.md)
     # scalable: no fixed container name or host port on the worker
     worker = config.split("  worker:", 1)[1]
     assert "container_name" not in worker and "ports" not in worker

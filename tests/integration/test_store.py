@@ -130,3 +130,16 @@ def test_running_jobs_without_lease_are_requeued(store):
     assert store.get(alive)["status"] == "running"
     assert [j["id"] for j in store.list("queued").jobs] == [lost]
     assert store.requeue_orphans() == []
+
+
+def test_the_embedded_redis_writes_every_write_to_disk_before_answering(redis_server):
+    """appendfsync always: with everysec Redis may answer before it writes the append-only file
+    (while a background fsync runs), and a kill -9 then loses acknowledged writes
+    (docs/reliability.md, Redis)."""
+    import redis
+    client = redis.Redis.from_url(redis_server.url, decode_responses=True)
+    try:
+        assert client.config_get("appendonly") == {"appendonly": "yes"}
+        assert client.config_get("appendfsync") == {"appendfsync": "always"}
+    finally:
+        client.close()
