@@ -583,7 +583,7 @@ def test_contracted_kernels_give_the_reproducible_ones_to_round_off(material, di
         assert relative_difference(getattr(contracted.particles, name), getattr(exact.particles, name)) <= TOLERANCE, name
 
 
-# -- MLS's USL pass in two loops, the gather vectorised (2D) ------------------------------------
+# -- MLS's USL pass vectorised (2D) ------------------------------------------------------------
 
 @pytest.mark.parametrize("material,threads,contract", [
     (NEO_HOOKEAN, 1, "1"), (NEO_HOOKEAN, 2, "0"), (FLUID, 2, "1"), (LINEAR_FLUID, 1, "0")])
