@@ -24,12 +24,15 @@ Part 3, G2P in two passes on flat views of the arrays, as LLVM's loop vectorizer
 it across particles: a gather of v_p and C_p that only reads x_p, then x_p, F_p and V_p (the
 same results to round-off). `--remarks` prints LLVM's loop-vectorizer remarks while they compile.
 Part 4, the G2P's particle update put off into the next P2G: whole steps of the solver with its
-generated kernels, and with kernels whose G2P stops after v_p and C_p and whose P2G first moves
+generated scalar kernels (`p2g`, `g2p`), and with kernels whose G2P stops after v_p and C_p and whose P2G first moves
 x_p and updates F_p and V_p (the same bits: checked after five steps, the update pending).
 Part 5, the solver's two USL G2P kernels for MLS, from the same generated text: `g2p` (one
 scalar pass, as parts 2-4 call it) and `g2p_mls` (the loop LLVM vectorises: solver/fused_template.py
 `_g2p_mls`), with the number of AVX-512 gathers in each one's code, and whether the particles
 come out the same bits.
+Part 6, P2G: the solver's two folded MLS P2G kernels, `p2g` (scalar) and `p2g_mls` (its work per
+particle vectorised in chunks, log J from solver/near_one_log.py: solver/fused_template.py
+`_p2g_mls`), and whether the nodes come out the same bits.
 
 --alone: one stepper's rate in a process of its own, timed as benchmarks/frameworks/timing.py
 times Taichi and Warp (three untimed steps, the best of three runs of 15 steps), where
@@ -331,8 +334,9 @@ def part_deferred(plain, steps: int = 15, repeats: int = 5) -> None:
         USL_MOVE, "            if mode == USL and l_is_c:\n                continue\n" + USL_MOVE, 1)
     sims["generated"].phases._kernels = plain
     sims["deferred"].phases._kernels = _module("fused_deferred", deferred)
-    for sim in sims.values():   # both on the one-pass g2p, which the deferred variant changes (not g2p_mls)
+    for sim in sims.values():   # both on the scalar p2g and g2p, which the deferred variant changes
         sim.phases._splits_mls_g2p = lambda: False
+        sim.phases._vectorises_mls_p2g = lambda *arrays: False
     for sim in sims.values():
         for _ in range(5):
             sim.advance(MLS_DT)
@@ -368,6 +372,32 @@ def part_vectorised(sim, plain, repeats: int) -> None:
            _timed({"g2p (one scalar pass)": lambda: _generated_g2p(sim, plain), "g2p_mls (vectorised)": vectorised},
                   p.count, repeats, restore))
     restore()
+
+
+def part_vectorised_p2g(sim, repeats: int) -> None:
+    """The solver's two folded MLS P2G kernels on the same state, as FusedPhases._p2g calls them."""
+    ph, p, g, c = sim.phases, sim.particles, sim.grid, sim.copies
+    from solver.step.fused import _flat
+    kernels, acc = ph._kernels, ph.acceleration
+
+    def scalar():
+        kernels.p2g(ph._p2g_variants[True, True], p.x, p.v, ph._affine_matrix, p.mass, p.volume, p.stored("stress"),
+                    p.F, ph._affine_matrix, p.volume0, ph._stress_parameters, acc, ph._frame, ph._d_inv, g.mass,
+                    g.momentum, g.force, c.mass, c.momentum, c.force, ph._bad, MLS_DT)
+
+    def vectorised():
+        kernels.p2g_mls(ph._p2g_mls_variants[True, acc.shape[0] == 1], *_flat(p.x, p.v, ph._affine_matrix), p.mass,
+                        p.volume, p.stored("stress"), *_flat(p.F, ph._affine_matrix), p.volume0, ph._stress_parameters,
+                        *_flat(acc), *ph._frame, ph._d_inv, g.mass, g.momentum, c.mass, c.momentum, ph._bad, MLS_DT)
+    results = []
+    for call in (scalar, vectorised):
+        g.reset()
+        call()
+        results.append([g.mass.copy(), g.momentum.copy()])
+    same = all(np.array_equal(a, b) for a, b in zip(*results))
+    vector_log = bool(ph._p2g_mls_variants[True, True][2].ndim - 1)
+    _print(f"P2G (folded MLS): the solver's two kernels (the same bits: {same}; log J from log_near_one: {vector_log})",
+           _timed({"p2g (scalar)": scalar, "p2g_mls (vectorised in part)": vectorised}, p.count, repeats, g.reset))
 
 
 def _restorer(sim):
@@ -442,6 +472,7 @@ def main() -> int:
     part_two_passes(sim, plain, args.repeats)
     part_deferred(plain)
     part_vectorised(sim, plain, args.repeats)
+    part_vectorised_p2g(sim, args.repeats)
     return 0
 
 

@@ -2,7 +2,8 @@
 
 One template serves every dimension. `source(dim)` returns the text of a module
 with the two kernels, `p2g` and `g2p` (in 2D also `g2p_mls`, MLS's USL pass written so
-that LLVM vectorises it: `_g2p_mls`), in which the loops over the stencil are
+that LLVM vectorises it: `_g2p_mls`, and `p2g_mls`, MLS's folded P2G with its work per
+particle vectorised: `_p2g_mls`), in which the loops over the stencil are
 nested once per axis and every per-axis and per-component statement is written
 out: scalars only, the form the hand-written 2D and 3D kernels had (a kernel
 generic over the dimension, with per-axis data in small arrays, was measured
@@ -80,6 +81,13 @@ from numba import njit, prange
 
 from solver.fused import KINEMATICS, REMAP, USL, _axis, _quadratic, _reduce, _reduce_mass_momentum
 from solver.threads import add_node_copies, block_bounds, own'''
+CHUNK = 64   # particles a chunk of `p2g_mls`: its buffers (16 values each in 2D) stay in L1 (64-256 measured: 64)
+LOG_CALL = re.compile(r"math\.log\((\w+)\)")
+MLS_IMPORTS = """
+from solver.fused import _TOUCH as TOUCH
+from solver.near_one_log import HIGH as LOG_HIGH, LOW as LOG_LOW, log_near_one
+
+CHUNK = {chunk}""".format(chunk=CHUNK)
 THERMAL_IMPORTS = """
 from solver.fused import _reduce_with
 from solver.threads import own_zeroed"""
@@ -320,8 +328,6 @@ def _p2g_row(dim: int) -> list[str]:
     node's w m b_p - V sigma_p grad w is wx[i] fw - gx[i] fg: fg = V sigma_a0 wo, fo = V
     (sigma_a1 go1 + ...), fw = m b_a wo - fo. The folded APIC momentum (dt in s, dt m b in mv)
     takes qa = wo r - fo and qb = wo m C_a0 once per row."""
-    momentum = [f"r{c} = mv{c}" + "".join(f" + mc{a}{b} * d{AXES[b]}" for b in range(1, dim))
-                for a, c in enumerate(AXES[:dim])]
     force = [line for a, c in enumerate(AXES[:dim]) for line in (
         f"fg{c} = s{a}0 * {_outer(dim)}",
         f"fo{c} = " + " + ".join(f"s{a}{b} * {_outer(dim, b)}" for b in range(1, dim)),
@@ -329,7 +335,13 @@ def _p2g_row(dim: int) -> list[str]:
     folded = [line for a, c in enumerate(AXES[:dim]) for line in (
         f"qa{c} = {_outer(dim)} * r{c} - fo{c}",
         f"qb{c} = {_outer(dim)} * mc{a}0")]
-    return momentum + force + ["if fold and not mls:", *_indent(folded, 1)]
+    return _momentum_row(dim) + force + ["if fold and not mls:", *_indent(folded, 1)]
+
+
+def _momentum_row(dim: int) -> list[str]:
+    """r{c} = m v_p + m C_p (x_I - x_p) along the outer axes: what a row's nodes share of it."""
+    return [f"r{c} = mv{c}" + "".join(f" + mc{a}{b} * d{AXES[b]}" for b in range(1, dim))
+            for a, c in enumerate(AXES[:dim])]
 
 
 def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
@@ -433,6 +445,175 @@ def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
         return ["    _reduce_with(grid_mass, grid_mom, grid_force, heat, heat[:, :0], copies_mass, copies_mom,",
                 "                 copies_force, copies_heat, copies_heat[:, :, :0])"]
     return ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]
+
+
+# -- MLS's P2G, vectorised in part ----------------------------------------------------
+
+
+
+def _p2g_mls_fields(dim: int) -> list[str]:
+    """What the vectorised pass hands the scatter per particle (rows of `buf`): f{c}, the weights,
+    m_p, m v_p (+ dt m b_p) and m C_p - dt V_p sigma_p D_p^-1."""
+    return ([f"f{c}" for c in AXES[:dim]] + [f"w{c}{n}" for c in AXES[:dim] for n in range(3)] + ["m"]
+            + [f"mv{c}" for c in AXES[:dim]] + [f"mc{a}{b}" for a in range(dim) for b in range(dim)])
+
+
+def _p2g_mls_stress(dim: int, stress: tuple | None, vector: bool) -> list[str]:
+    """sig{a}{b} as `_stress_of_particle` forms it, from the flat arrays. `vector`: each math.log(v)
+    of the material's lines is `log_near_one(v)` where that is libm's log (solver/near_one_log.py,
+    the compile-time `vector_log`) and v lies in its interval; `far` counts the particles where it
+    does not (their values are formed again with math.log: `_p2g_mls_chunk`)."""
+    stored = _tensor("sig{a}{b} = stress[p, {a}, {b}]", dim)
+    if stress is None:
+        return stored
+    lines = list(stress[1])
+    logged = _logged(stress)
+    if vector:
+        lines = [LOG_CALL.sub(r"(log_near_one(\1) if vector_log else math.log(\1))", line) for line in lines]
+        lines += [f"far += vector_log and not ({_near_one(logged)})"] if logged else []
+    elif logged:
+        lines += [f"if vector_log and {_near_one(logged)}:", "    continue   # (the vectorised pass formed it)"]
+    flat = [f"f{a}{b} = F[{_flat('p', dim * dim, dim * a + b)}]" for a in range(dim) for b in range(dim)]
+    return ["if inline:",
+            *_indent(flat, 1),
+            f"    fj = {_determinant(list(range(dim)), list(range(dim)), 'f')}",
+            *_indent([f"l{a}{b} = L[{_flat('p', dim * dim, dim * a + b)}]" for a in range(dim) for b in range(dim)], 1),
+            "    vol_p, vol0_p = volume[p], volume0[p]",
+            *_indent(lines, 1),
+            "else:",
+            *_indent(stored, 1)]
+
+
+def _near_one(names: list[str]) -> str:
+    return " & ".join(f"({name} >= LOG_LOW) & ({name} < LOG_HIGH)" for name in names) or "True"
+
+
+def _p2g_mls_axes(dim: int) -> list[str]:
+    """`_axis` for quadratic B-splines written inline (branch-free: LLVM vectorises it), `inside` whether
+    the particle is in the grid; the first node 0 outside, as `_axis` gives it."""
+    lines = [line for a, c in enumerate(AXES[:dim]) for line in (
+        f"at{c} = (x[{_flat('p', dim, a)}] - lower{a}) * inv_h{a}",
+        f"ok{c} = (at{c} >= 0.5 - TOUCH) & (at{c} <= cells{a} - 0.5 + TOUCH)",
+        f"i{c} = min(max(int(at{c} - 0.5), 0), cells{a} - 2) if ok{c} else 0")]
+    return lines + [f"inside = {_each('ok{c}', dim, ' & ')}"]
+
+
+def _p2g_mls_particle(dim: int, stress: tuple | None, vector: bool) -> list[str]:
+    """`_p2g_particle`'s work on particle p = c + k (MLS, folded, quadratic B-splines) up to the
+    scatter, in its order (the same bits), into column k of the buffers."""
+    fields = _p2g_mls_fields(dim)
+    return [
+        *_p2g_mls_stress(dim, stress, vector),
+        *_p2g_mls_axes(dim),
+        *[line for a, c in enumerate(AXES[:dim]) for line in (f"f{c} = at{c} - i{c}", f"w{c} = _quadratic(f{c})")],
+        *(["outside += not inside"] if vector else []),
+        "m = mass[p]",
+        "if shared_acc:   # (a compile-time constant: a load from a selected index keeps the loop scalar)",
+        f"    {_each('mb{c}', dim)} = {_each('m * acc0{c}', dim)}",
+        "else:",
+        f"    {_each('mb{c}', dim)} = {_each('m * acc[' + _flat('p', dim, '{a}') + ']', dim)}",
+        f"{_each('mv{c}', dim)} = {_each('m * v[' + _flat('p', dim, '{a}') + ']', dim)}",
+        "vol = volume[p]",
+        "if loaded:",
+        *_indent(_each_line("mv{c} += dt * mb{c}", dim), 1),
+        *_tensor("s{a}{b} = dt * (vol * sig{a}{b} * d_inv{b})", dim),
+        *[f"mc{a}{b} = m * C[{_flat('p', dim * dim, dim * a + b)}] - s{a}{b}" for a in range(dim) for b in range(dim)],
+        *[f"first[{a}, k] = i{c}" for a, c in enumerate(AXES[:dim])],
+        *[f"buf[{n}, k] = " + (f"w{name[1]}[{name[2]}]" if name[0] == "w" else name) for n, name in enumerate(fields)],
+    ]
+
+
+def _logged(stress: tuple | None) -> list[str]:
+    """The names the material's lines take the log of (`math.log(name)`)."""
+    return sorted({name for line in (stress[1] if stress else ()) for name in LOG_CALL.findall(line)})
+
+
+def _p2g_mls_scatter(dim: int) -> list[str]:
+    """The nodes of particle c + k from the buffers, as `_p2g_node` adds them with fold and mls."""
+    fields = _p2g_mls_fields(dim)
+    weights = [f"w{c} = " + ", ".join(f"buf[{fields.index(f'w{c}{n}')}, k]" for n in range(3)) for c in AXES[:dim]]
+    node = [f"w = wx[i] * {_outer(dim)}",
+            "dx = (i - fx) * h0",
+            *[f"p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
+            _scatter("gm", "node", "+=", "w * m"),
+            *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)]]
+    return [*[f"i{c} = first[{a}, k]" for a, c in enumerate(AXES[:dim])],
+            *[f"{name} = buf[{n}, k]" for n, name in enumerate(fields) if not name.startswith("w")],
+            *weights,
+            *_stencil(dim, node, gradients=False, contact=False, row_start=_momentum_row(dim))]
+
+
+def _p2g_mls_chunk(dim: int, stress: tuple | None) -> list[str]:
+    """One chunk of a thread's block: the vectorised pass, the rare passes after it (log outside its
+    interval, a particle outside the grid), the scalar scatter."""
+    fix = ["if far:   # (a log outside log_near_one's interval) formed again with math.log",
+           "    for k in range(n):",
+           "        p = c + k",
+           *_indent(_p2g_mls_particle(dim, stress, vector=False), 2)] if _logged(stress) else []
+    zeroed = [f"buf[{n}, k] = 0.0" for n in range(len(_p2g_mls_fields(dim)))]
+    return [
+        "c = start + chunk * CHUNK   # (c >= 0 known: LLVM vectorises the loop below)",
+        "n = min(CHUNK, total - chunk * CHUNK)",
+        "far = outside = 0",
+        "for k in range(n):",
+        "    p = c + k",
+        *_indent(_p2g_mls_particle(dim, stress, vector=True), 1),
+        *fix,
+        "if outside:   # (the step fails) the first such particle; the others add nothing",
+        "    for k in range(n):",
+        "        p = c + k",
+        *_indent(_p2g_mls_axes(dim), 2),
+        "        if not inside:",
+        "            if bad[t] < 0:",
+        "                bad[t] = p",
+        *_indent(zeroed, 3),
+        "for k in range(n):",
+        *_indent(_p2g_mls_scatter(dim), 1),
+    ]
+
+
+def _flat_frame(dim: int) -> list[str]:
+    """The frame and D_p^-1 as scalars, for the vectorised kernels, which take the frame unpacked."""
+    return [f"{_each('h{a}', dim)} = {_each('h[{a}]', dim)}", *[f"stride{a} = strides[{a}]" for a in range(1, dim)],
+            f"{_each('lower{a}', dim)} = {_each('lower[{a}]', dim)}",
+            f"{_each('inv_h{a}', dim)} = {_each('inv_h[{a}]', dim)}",
+            f"{_each('cells{a}', dim)} = {_each('cells[{a}]', dim)}",
+            f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"]
+
+
+def _p2g_mls(dim: int, stress: tuple | None, contract: bool) -> list[str]:
+    """`p2g` for MLS with the force folded (`fold`) and quadratic B-splines, its work per particle
+    in a loop LLVM vectorises: per chunk of CHUNK particles, sigma_p (with log_near_one for log J:
+    a call to libm keeps a loop scalar), the weights, m v_p and m C_p - dt V sigma_p D_p^-1 for 8
+    particles at a time into small buffers, then the scatter, which cannot be vectorised (the
+    particles of a loop add into the same nodes), reads them. The same bits as `p2g`."""
+    options = f", fastmath={CONTRACT}" if contract else ""
+    frame = _flat_frame(dim)
+    return ["", "", f"@njit(parallel=True, cache=True{options})",
+            "def p2g_mls(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, lower, h, inv_h, cells,\n"
+            "            strides, offset, d_inv, grid_mass, grid_mom, copies_mass, copies_mom, bad, dt):",
+            '    """m_I and (mv)_I + dt f_I as `p2g` with `fold` and `mls` forms them (the same bits), on flat\n'
+            "    views: x, v and acc dim entries a row (acc one row when shared), C, F and L dim^2. variant:\n"
+            "    (loaded, inline, vector_log, shared_acc) constants; vector_log: log_near_one is libm's log\n"
+            "    here; shared_acc: acc is one row for all.\n"
+            '    bad[t]: first particle of block t outside the grid."""',
+            "    loaded_, inline_, vector_log_, shared_acc_ = variant",
+            *_indent(_parameters(stress), 1),
+            *_indent(frame, 1),
+            "    threads = copies_mass.shape[0] + 1",
+            f"    {_each('acc0{c}', dim)} = ({_each('acc[{a}]', dim)}) if acc.shape[0] >= {dim} else ({_each('0.0', dim)})",
+            "    bounds = block_bounds(volume.shape[0], threads)",
+            "    for t in prange(threads):",
+            "        S, loaded, inline = 3, loaded_.ndim == 2, inline_.ndim == 2   # compile-time constants",
+            "        vector_log, shared_acc = vector_log_.ndim == 2, shared_acc_.ndim == 2",
+            "        gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
+            f"        first, buf = np.empty(({dim}, CHUNK), dtype=np.int64), np.empty(({len(_p2g_mls_fields(dim))}, CHUNK))",
+            "        bad[t] = -1",
+            "        start = max(bounds[t], 0)",
+            "        total = bounds[t + 1] - start",
+            "        for chunk in range((total + CHUNK - 1) // CHUNK):",
+            *_indent(_p2g_mls_chunk(dim, stress), 3),
+            "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)"]
 
 
 # -- G2P ---------------------------------------------------------------------------
@@ -702,11 +883,7 @@ def _g2p_mls(dim: int, contract: bool) -> list[str]:
     (`_g2p_mls_gather`); and a J <= 0 is counted, its particle looked for after the loop (a
     conditional store to bad[t] keeps a loop scalar)."""
     options = f", fastmath={CONTRACT}" if contract else ""
-    frame = [f"{_each('h{a}', dim)} = {_each('h[{a}]', dim)}", *[f"stride{a} = strides[{a}]" for a in range(1, dim)],
-             f"{_each('lower{a}', dim)} = {_each('lower[{a}]', dim)}",
-             f"{_each('inv_h{a}', dim)} = {_each('inv_h[{a}]', dim)}",
-             f"{_each('cells{a}', dim)} = {_each('cells[{a}]', dim)}",
-             f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"]
+    frame = _flat_frame(dim)
     return ["", "", f"@njit(parallel=True, cache=True{options})",
             "def g2p_mls(x, v, C, F, v_new, volume, volume0, lower, h, inv_h, cells, strides, offset, d_inv, dt,\n"
             "            threads, bad):",
@@ -747,9 +924,12 @@ def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple
         raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
     header = (HEADER.format(dim=dim) + ("\nimport math" if stress else "") + (THERMAL_IMPORTS if thermal else "")
               + ("\nfrom solver.fused import _reduce_with" if contact else ""))
+    # the vectorised MLS passes: 2D only (in 3D G2P measured slower, P2G no faster: docs/benchmarks.md)
+    mls = dim == 2 and not (thermal or contact)
+    header += MLS_IMPORTS if mls else ""
     return "\n".join([header, *_p2g(dim, thermal, contact, stress, contract),
                       *_g2p(dim, thermal, contact, update, contract),
-                      *(_g2p_mls(dim, contract) if dim == 2 and not (thermal or contact) else [])]) + "\n"
+                      *(_p2g_mls(dim, stress, contract) + _g2p_mls(dim, contract) if mls else [])]) + "\n"
 
 
 def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None = None) -> str:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import fused, kernels, shape
+from solver import fused, kernels, near_one_log, shape
 from solver.threads import first_of
 from solver.step.phases import Phases
 
@@ -71,6 +71,14 @@ class FusedPhases(Phases):
         self._stress_parameters = model.stress_parameters() if model is not None else np.zeros(0)
         # MLS's USL pass as `g2p_mls` (2D, no conduction or contact: the modules that have it; no FLIP blend)
         self._has_g2p_mls = hasattr(self._kernels, "g2p_mls") and sim.flip_ratio == 0.0
+        # MLS's folded P2G as `p2g_mls` (the same modules; quadratic B-splines), log J vectorised where
+        # log_near_one is libm's log in this process (else the kernel calls math.log)
+        self._has_p2g_mls = (hasattr(self._kernels, "p2g_mls") and apic and sim.affine.mls
+                             and self._support.ndim - 1 == 3)
+        vector_log = fused.constant(self._has_p2g_mls and near_one_log.matches_libm())
+        self._p2g_mls_variants = {(inline, shared): (fused.constant(sim.loads.any), fused.constant(inline), vector_log,
+                                                     fused.constant(shared))
+                                  for inline in (False, True) for shared in (False, True)}
         self._g2p_variants = {(mode, l_is_c, updates): (self._support, fused.constant(mode), affine, blend, mls,
                                                         fused.constant(l_is_c), fused.constant(updates))
                               for mode in (fused.USL, fused.REMAP, fused.KINEMATICS) for l_is_c in (False, True)
@@ -132,15 +140,30 @@ class FusedPhases(Phases):
         # formed while it is a function of the state (Particles.derived), even when a frame or a
         # checkpoint has read it since: the bits do not depend on what was read; an initial
         # stress or one assigned is the state, and is read
-        variant = self._p2g_variants[self.folds_force(), p.derived("stress")]
+        fold, inline = self.folds_force(), p.derived("stress")
         # (L_p put off is C_p: `_g2p`)
         L = self._affine_matrix if p.pending("L") else p.stored("L")
-        self._kernels.p2g(variant, p.x, p.v, self._affine_matrix, p.mass, p.volume, p.stored("stress"), p.F, L,
-                          p.volume0, self._stress_parameters, acc, self._frame, self._d_inv, g.mass, g.momentum,
-                          g.force, c.mass, c.momentum, c.force, bad, self.dt, *self._heat_p2g(), *self._contact_p2g())
+        if fold and self._vectorises_mls_p2g(L, acc):
+            self._kernels.p2g_mls(self._p2g_mls_variants[inline, acc.shape[0] == 1], *_flat(p.x, p.v, self._affine_matrix), p.mass,
+                                  p.volume, p.stored("stress"), *_flat(p.F, L), p.volume0, self._stress_parameters,
+                                  *_flat(acc), *self._frame, self._d_inv, g.mass, g.momentum, c.mass, c.momentum, bad,
+                                  self.dt)
+        else:
+            self._kernels.p2g(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
+                              p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
+                              self._d_inv, g.mass, g.momentum, g.force, c.mass, c.momentum, c.force, bad, self.dt,
+                              *self._heat_p2g(), *self._contact_p2g())
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _vectorises_mls_p2g(self, *more: np.ndarray) -> bool:
+        """Whether MLS's folded P2G runs as `p2g_mls`, its work per particle vectorised
+        (solver/fused_template.py `_p2g_mls`; the same bits as `p2g`): where the module has it,
+        with quadratic B-splines, and the arrays it takes flat views of (`more`: L_p and the
+        body acceleration of the step) are C-contiguous."""
+        p = self.sim.particles
+        return self._has_p2g_mls and all(a.flags.c_contiguous for a in (p.x, p.v, self._affine_matrix, p.F, *more))
 
     def _integrate(self, dt: float) -> None:
         """After a folded P2G, v~_I^{t+dt} = (mv)_I / m_I = v_I^t, dt f_I being in (mv)_I already: the

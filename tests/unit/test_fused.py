@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from solver import fused, fused_template, generated, shape
+from solver import fused, fused_template, generated, near_one_log, shape
 from solver.scene import load_scene
 from solver.stepper import ExplicitMPM, Instability
 
@@ -239,7 +239,7 @@ def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(mon
     monkeypatch.delenv(fused_template.FMA, raising=False)   # the default
     assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
     monkeypatch.setenv(fused_template.FMA, "1")
-    assert fused_template.source(2).count(decorator) == 3   # p2g, g2p and g2p_mls
+    assert fused_template.source(2).count(decorator) == 4   # p2g, g2p, p2g_mls and g2p_mls
     monkeypatch.setenv(fused_template.FMA, "yes")
     with pytest.raises(ValueError, match="MPM_FMA='yes': must be 0"):
         fused_template.source(2)
@@ -418,7 +418,7 @@ def stepped_with_and_without(scene, switch: str) -> tuple:
     FusedPhases that is true for the scene) as it is, and turned off."""
     on, off = ExplicitMPM(scene), ExplicitMPM(scene)
     assert getattr(on.phases, switch)()
-    setattr(off.phases, switch, lambda: False)
+    setattr(off.phases, switch, lambda *arrays: False)
     for _ in range(STEPS):
         on.advance(2e-4)
         off.advance(2e-4)
@@ -655,3 +655,106 @@ def test_the_vectorised_mls_pass_names_the_first_inverted_particle_as_the_one_pa
             sim.advance(2e-4)
         named.append(failure.value.particle_id)
     assert named == [int(sim.particles.id[n // 3])] * 2
+
+
+# -- MLS's P2G, its work per particle vectorised (2D) ----------------------------------------
+
+def _counted(sim, kernel: str) -> list:
+    """The calls the simulation makes to its module's `kernel` from now on (each one still runs)."""
+    calls, real = [], getattr(sim.phases._kernels, kernel)
+    sim.phases._kernels = SimpleNamespace(**vars(sim.phases._kernels))
+    setattr(sim.phases._kernels, kernel, lambda *args: calls.append(real(*args)))
+    return calls
+
+
+def _outside_log_interval(F: np.ndarray) -> int:
+    J = np.linalg.det(F)
+    return int(np.sum((J < near_one_log.LOW) | (J >= near_one_log.HIGH)))
+
+
+@pytest.mark.parametrize("material,threads,contract", [
+    (NEO_HOOKEAN, 1, "0"), (NEO_HOOKEAN, 2, "1"), (FLUID, 2, "1"), (LINEAR_FLUID, 1, "0")])
+def test_the_vectorised_mls_p2g_gives_the_scalar_kernel_bit_for_bit(material, threads, contract, monkeypatch):
+    """`p2g_mls` forms sigma_p, the weights, m v_p + dt m b_p and m C_p - dt V sigma_p D_p^-1 with the
+    operations of `p2g` in its order (log J from log_near_one, libm's own bits) and scatters them as
+    it does: after STEPS steps of the collision under gravity the state is the same bits, with FMA
+    contraction and without. The neo-Hookean bodies are squeezed past log_near_one's interval, so
+    the particles whose log J comes from math.log after the vectorised pass are in it too."""
+    monkeypatch.setenv(fused_template.FMA, contract)
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
+    vectorised, scalar = stepped_with_and_without(scene, "_vectorises_mls_p2g")
+    assert vectorised.phases._p2g_mls_variants[True, True][2].ndim - 1 == near_one_log.matches_libm()
+    calls = _counted(vectorised, "p2g_mls")
+    vectorised.advance(2e-4)
+    scalar.advance(2e-4)
+    assert len(calls) == 1
+    if material is NEO_HOOKEAN:
+        assert _outside_log_interval(vectorised.particles.F) > 0
+    for name in ("x", "v", "F", "stress", "volume"):
+        assert np.array_equal(getattr(vectorised.particles, name), getattr(scalar.particles, name)), name
+
+
+def test_the_vectorised_mls_p2g_reads_an_assigned_stress_as_the_scalar_kernel_does():
+    """An assigned stress is the state (Particles.derived): both kernels read it instead of forming it."""
+    scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"]}
+    scene["materials"]["m"] = NEO_HOOKEAN
+    sims = []
+    for vectorised in (True, False):
+        sim = ExplicitMPM(load_scene(scene))
+        sim.phases._vectorises_mls_p2g = lambda *arrays, on=vectorised: on and sim.phases._has_p2g_mls
+        sim.advance(2e-4)
+        sim.particles.stress = sim.particles.stress * 1.5
+        assert not sim.particles.derived("stress")
+        calls = _counted(sim, "p2g_mls")
+        sim.advance(2e-4)
+        assert len(calls) == int(vectorised)
+        sims.append(sim)
+    for name in ("x", "v", "F"):
+        assert np.array_equal(getattr(sims[0].particles, name), getattr(sims[1].particles, name)), name
+
+
+@pytest.mark.parametrize("change,runs", [
+    ({}, True),
+    ({"method": METHODS["musl-quadratic-mls"]}, True),                  # P2G is the same in MUSL
+    ({"materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1e4,
+                          "poisson_ratio": 0.3}}}, True),                # the stored stress read
+    ({"dimension": 3}, False),
+    ({"method": {**METHODS["usl-quadratic-mls"], "transfer": "apic"}}, False),
+    ({"damping": {"type": "viscous", "coefficient": 5.0}}, False),     # damping reads f_I: not folded
+])
+def test_the_vectorised_mls_p2g_runs_for_mls_with_the_force_folded_in_2d(change, runs):
+    base = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"]}
+    base["materials"]["m"] = NEO_HOOKEAN
+    if change.get("dimension") == 3:
+        scene = {**copy.deepcopy(SCENE_3D), "method": METHODS["usl-quadratic-mls"]}
+    else:
+        scene = {**base, **change}
+    sim = ExplicitMPM(load_scene(scene))
+    calls = _counted(sim, "p2g_mls") if hasattr(sim.phases._kernels, "p2g_mls") else []
+    sim.advance(2e-4)
+    assert len(calls) == int(runs)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_vectorised_mls_p2g_names_the_first_particle_outside_the_grid_as_the_scalar_kernel(threads):
+    """The vectorised pass counts the particles outside the grid, and the chunk that has one looks
+    for the first: the step fails naming the particle `p2g` names."""
+    scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
+    scene["materials"]["m"] = NEO_HOOKEAN
+    named = []
+    for vectorised in (True, False):
+        sim = ExplicitMPM(load_scene(scene))
+        if not vectorised:
+            sim.phases._vectorises_mls_p2g = lambda *arrays: False
+        sim.advance(2e-4)
+        n = sim.particles.count
+        for p, x in ((n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])):
+            sim.particles.x[p] = x
+        calls = _counted(sim, "p2g_mls")
+        with pytest.raises(Instability, match="left the grid") as failure:
+            sim.advance(2e-4)
+        assert len(calls) == int(vectorised)
+        named.append(failure.value.particle_id)
+    assert named == [int(sim.particles.id[n // 3 + 70])] * 2
