@@ -144,10 +144,10 @@ class FusedPhases(Phases):
         # (L_p put off is C_p: `_g2p`)
         L = self._affine_matrix if p.pending("L") else p.stored("L")
         if fold and self._vectorises_mls_p2g(L, acc):
-            self._kernels.p2g_mls(self._p2g_mls_variants[inline, acc.shape[0] == 1], *_flat(p.x, p.v, self._affine_matrix), p.mass,
-                                  p.volume, p.stored("stress"), *_flat(p.F, L), p.volume0, self._stress_parameters,
-                                  *_flat(acc), *self._frame, self._d_inv, g.mass, g.momentum, c.mass, c.momentum, bad,
-                                  self.dt)
+            variant = self._p2g_mls_variants[inline, acc.shape[0] == 1]   # (one row: a shared acceleration)
+            self._kernels.p2g_mls(variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"),
+                                  *_flat(p.F, L), p.volume0, self._stress_parameters, *_flat(acc), *self._frame,
+                                  self._d_inv, g.mass, g.momentum, c.mass, c.momentum, bad, self.dt)
         else:
             self._kernels.p2g(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
                               p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
