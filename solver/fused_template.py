@@ -463,7 +463,7 @@ def _p2g_mls_stress(dim: int, stress: tuple | None, vector: bool) -> list[str]:
     of the material's lines is `log_near_one(v)` where that is libm's log (solver/near_one_log.py,
     the compile-time `vector_log`) and v lies in its interval; `far` counts the particles where it
     does not (their values are formed again with math.log: `_p2g_mls_chunk`)."""
-    stored = _tensor("sig{a}{b} = stress[p, {a}, {b}]", dim)
+    stored = _stress_of_particle(dim, None)
     if stress is None:
         return stored
     lines = list(stress[1])

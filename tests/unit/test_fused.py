@@ -585,6 +585,14 @@ def test_contracted_kernels_give_the_reproducible_ones_to_round_off(material, di
 
 # -- MLS's USL pass vectorised (2D) ------------------------------------------------------------
 
+def _counted(sim, kernel: str) -> list:
+    """The calls the simulation makes to its module's `kernel` from now on (each one still runs)."""
+    calls, real = [], getattr(sim.phases._kernels, kernel)
+    sim.phases._kernels = SimpleNamespace(**vars(sim.phases._kernels))
+    setattr(sim.phases._kernels, kernel, lambda *args: calls.append(real(*args)))
+    return calls
+
+
 @pytest.mark.parametrize("material,threads,contract", [
     (NEO_HOOKEAN, 1, "1"), (NEO_HOOKEAN, 2, "0"), (FLUID, 2, "1"), (LINEAR_FLUID, 1, "0")])
 def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material, threads, contract, monkeypatch):
@@ -596,10 +604,7 @@ def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material,
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
     split, one_pass = stepped_with_and_without(scene, "_splits_mls_g2p")
-    calls = []
-    kernel = split.phases._kernels.g2p_mls
-    split.phases._kernels = SimpleNamespace(**vars(split.phases._kernels))
-    split.phases._kernels.g2p_mls = lambda *args: calls.append(kernel(*args))
+    calls = _counted(split, "g2p_mls")
     split.advance(2e-4)
     one_pass.advance(2e-4)
     assert len(calls) == 1
@@ -626,9 +631,7 @@ def test_the_vectorised_mls_pass_runs_only_for_mls_under_usl_in_2d(change):
     else:
         other = {**base, **change}
     sim = ExplicitMPM(load_scene(other))
-    calls = []
-    sim.phases._kernels = SimpleNamespace(**vars(sim.phases._kernels))
-    sim.phases._kernels.g2p_mls = lambda *args: calls.append(args)
+    calls = _counted(sim, "g2p_mls") if hasattr(sim.phases._kernels, "g2p_mls") else []
     sim.advance(2e-4)
     assert calls == []
 
@@ -658,14 +661,6 @@ def test_the_vectorised_mls_pass_names_the_first_inverted_particle_as_the_one_pa
 
 
 # -- MLS's P2G, its work per particle vectorised (2D) ----------------------------------------
-
-def _counted(sim, kernel: str) -> list:
-    """The calls the simulation makes to its module's `kernel` from now on (each one still runs)."""
-    calls, real = [], getattr(sim.phases._kernels, kernel)
-    sim.phases._kernels = SimpleNamespace(**vars(sim.phases._kernels))
-    setattr(sim.phases._kernels, kernel, lambda *args: calls.append(real(*args)))
-    return calls
-
 
 def _outside_log_interval(F: np.ndarray) -> int:
     J = np.linalg.det(F)
