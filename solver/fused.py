@@ -15,7 +15,8 @@ step gives the general step's answer to round-off (tests/unit/test_fused.py):
            velocity; x) -> material
 
 `kernels(dim)` gives the module with the two kernels, `p2g` and `g2p` (in 2D also
-`g2p_mls` and `p2g_mls`, MLS's USL pass and folded P2G vectorised), for a dimension: they are written out from one
+`g2p_mls` and `p2g_mls`, MLS's USL pass and folded P2G vectorised, and `g2p_kinematics`, MUSL's
+KINEMATICS pass vectorised), for a dimension: they are written out from one
 template (solver/fused_template.py)
 into a generated, cached source file. This module keeps what every dimension
 shares: which scenes they serve (`supports`), the weights along one axis

@@ -2,8 +2,9 @@
 
 One template serves every dimension. `source(dim)` returns the text of a module
 with the two kernels, `p2g` and `g2p` (in 2D also `g2p_mls`, MLS's USL pass written so
-that LLVM vectorises it: `_g2p_mls`, and `p2g_mls`, MLS's folded P2G with its work per
-particle vectorised: `_p2g_mls`), in which the loops over the stencil are
+that LLVM vectorises it: `_g2p_mls`, `p2g_mls`, MLS's folded P2G with its work per
+particle vectorised: `_p2g_mls`, and `g2p_kinematics`, MUSL's KINEMATICS pass without MLS
+vectorised: `_g2p_kinematics`), in which the loops over the stencil are
 nested once per axis and every per-axis and per-component statement is written
 out: scalars only, the form the hand-written 2D and 3D kernels had (a kernel
 generic over the dimension, with per-axis data in small arrays, was measured
@@ -856,10 +857,16 @@ def _g2p_mls_gather(dim: int) -> list[str]:
 def _g2p_mls_update(dim: int) -> list[str]:
     """x_p += dt v_p, F_p <- (I + dt L_p) F_p with L_p = C_p, V_p = det F_p V0_p, as
     `_g2p_particle` does them (the same bits); a J <= 0 is counted (`_g2p_mls`)."""
-    entry = [(a, b) for a in range(dim) for b in range(dim)]
     return [*_each_line(f"x[{_flat('p', dim, '{a}')}] += dt * vp{{c}}", dim),
             *_tensor("l{a}{b} = b{a}{b} * d_inv{b}", dim),
-            *[f"f{a}{b} = F[{_flat('p', dim * dim, dim * a + b)}]" for a, b in entry],
+            *_flat_deformation(dim)]
+
+
+def _flat_deformation(dim: int) -> list[str]:
+    """F_p <- (I + dt L_p) F_p and V_p = det F_p V0_p on the flat F, as `_deformation_gradient` and
+    `_g2p_particle` form them (the same bits); a J <= 0 is counted in `inverted`."""
+    entry = [(a, b) for a in range(dim) for b in range(dim)]
+    return [*[f"f{a}{b} = F[{_flat('p', dim * dim, dim * a + b)}]" for a, b in entry],
             *[f"n{a}{b} = f{a}{b} + " + " + ".join(f"dt * l{a}{c} * f{c}{b}" for c in range(dim)) for a, b in entry],
             *[f"F[{_flat('p', dim * dim, dim * a + b)}] = n{a}{b}" for a, b in entry],
             f"J = {_determinant(list(range(dim)), list(range(dim)))}",
@@ -906,6 +913,93 @@ def _g2p_mls(dim: int, contract: bool) -> list[str]:
             "                    break"]
 
 
+# -- MUSL's kinematics pass, vectorised ----------------------------------------------------
+
+def _g2p_kinematics_axes(dim: int) -> list[str]:
+    """`_axis` for a particle inside the grid, inline (LLVM vectorises it): the first node, f{c}, and
+    the weights and gradients the kinematics pass reads, for the compile-time support S (2: linear
+    hats, 3: quadratic B-splines), with `_axis`'s expressions (the same bits)."""
+    lines = []
+    for a, c in enumerate(AXES[:dim]):
+        lines += [f"at{c} = (x[{_flat('p', dim, a)}] - lower{a}) * inv_h{a}",
+                  "if S == 2:",
+                  f"    i{c} = min(int(at{c}), cells{a} - 1)",
+                  f"    f{c} = at{c} - i{c}",
+                  f"    w{c}0, w{c}1, w{c}2 = 1.0 - f{c}, f{c}, 0.0",
+                  f"    g{c}0, g{c}1, g{c}2 = -inv_h{a}, inv_h{a}, 0.0",
+                  "else:",
+                  f"    i{c} = min(max(int(at{c} - 0.5), 0), cells{a} - 2)",
+                  f"    f{c} = at{c} - i{c}",
+                  f"    w{c}0, w{c}1, w{c}2 = _quadratic(f{c})",
+                  f"    g{c}0, g{c}1, g{c}2 = (-(1.5 - f{c}) * inv_h{a}, -2.0 * (f{c} - 1.0) * inv_h{a},"
+                  f" (f{c} - 0.5) * inv_h{a})"]
+    return lines
+
+
+def _g2p_kinematics_gather(dim: int) -> list[str]:
+    """L_p = sum v_I grad w_I as `_g2p_gather` and `_g2p_row_end` sum it in the KINEMATICS pass
+    (not MLS): along x first (s{c}, u{c}), then the row's outer factor; every node written out, the
+    third of a row under `S == 3` (a compile-time constant)."""
+    lines = [_zeros([f"l{a}{b}" for a in range(dim) for b in range(dim)])]
+    for row in np.ndindex(*(3,) * (dim - 1)):   # (j) or (k, j): the outer axis outermost, as `_stencil` nests them
+        index = dict(zip(LOOPS[dim - 1:0:-1], row))
+        guard = any(index[LOOPS[a]] == 2 for a in range(1, dim))
+        wo = " * ".join(f"w{AXES[a]}{index[LOOPS[a]]}" for a in range(1, dim))
+        go = {b: " * ".join(f"{'g' if a == b else 'w'}{AXES[a]}{index[LOOPS[a]]}" for a in range(1, dim))
+              for b in range(1, dim)}
+        start = " + ".join(f"(i{AXES[a]} + {index[LOOPS[a]]}) * stride{a}" for a in range(1, dim))
+        body = [f"row = {start} - offset + ix", _zeros([f"{n}{c}" for n in "su" for c in AXES[:dim]])]
+        for i in range(3):
+            node = _flat(f"(row + {i})", dim, "{a}")
+            gather = [f"{_each('v{c}', dim)} = {_each(f'v_new[{node}]', dim)}",
+                      *_each_line(f"s{{c}} += wx{i} * v{{c}}", dim), *_each_line(f"u{{c}} += gx{i} * v{{c}}", dim)]
+            body += ["if S == 3:", *_indent(gather, 1)] if i == 2 else gather
+        body += [*[f"l{a}0 += {wo} * u{AXES[a]}" for a in range(dim)],
+                 *[f"l{a}{b} += {go[b]} * s{AXES[a]}" for a in range(dim) for b in range(1, dim)]]
+        lines += ["if S == 3:", *_indent(body, 1)] if guard else body
+    return lines
+
+
+def _g2p_kinematics_update(dim: int) -> list[str]:
+    """x_p += dt v_pic, L_p written, F_p and V_p, as `_g2p_particle` does them in the KINEMATICS
+    pass (the same bits); a J <= 0 is counted."""
+    return [*_each_line(f"x[{_flat('p', dim, '{a}')}] += dt * rate[{_flat('p', dim, '{a}')}]", dim),
+            *[f"L[{_flat('p', dim * dim, dim * a + b)}] = l{a}{b}" for a in range(dim) for b in range(dim)],
+            *_flat_deformation(dim)]
+
+
+def _g2p_kinematics(dim: int, contract: bool) -> list[str]:
+    """`g2p`'s KINEMATICS pass (MUSL, not MLS: L_p from grad w) without a stress update, in a loop
+    LLVM vectorises, written as `_g2p_mls` is: flat views, the first node inline, a J <= 0 counted and
+    looked for after the loop. The same bits as `g2p`. A material's update lines stay out: in the
+    loop, their read-modify-write of 5 of a particle's 9 stress entries became AVX-512 gathers and
+    scatters, and the pass ran twice as slow as `g2p` (the material's own pass runs after it:
+    solver/step/fused.py `updates_stress`)."""
+    options = f", fastmath={CONTRACT}" if contract else ""
+    return ["", "", f"@njit(parallel=True, cache=True{options})",
+            "def g2p_kinematics(support, x, rate, L, F, v_new, volume, volume0, lower, h, inv_h, cells, strides, offset,\n"
+            "                   dt, threads, bad):",
+            '    """MUSL\'s KINEMATICS pass as `g2p` runs it without MLS and without `updates` (the same bits),\n'
+            "    on flat views: x, rate and the nodes' v_new dim entries a row, L and F dim^2. support: the\n"
+            "    compile-time constant S (2: linear hats, 3: quadratic B-splines) as `g2p`'s variant has it.\n"
+            '    bad[t]: first particle of block t whose J = det F is not positive."""',
+            *_indent(_flat_frame(dim)[:-1], 1),   # (no D_p^-1)
+            "    bounds = block_bounds(volume.shape[0], threads)",
+            "    for t in prange(threads):",
+            "        S = support.ndim - 1   # a compile-time constant",
+            "        start, inverted = max(bounds[t], 0), 0",
+            "        for k in range(bounds[t + 1] - start):",
+            "            p = start + k",
+            *_indent(_g2p_kinematics_axes(dim) + _g2p_kinematics_gather(dim) + _g2p_kinematics_update(dim), 3),
+            "        bad[t] = -1",
+            "        if inverted:   # (rare) the first such particle, J formed as the loop formed it",
+            "            bad[t] = start",
+            "            for p in range(start, bounds[t + 1]):",
+            f"                if {_flat_determinant(dim)} <= 0.0:",
+            "                    bad[t] = p",
+            "                    break"]
+
+
 # -- the generated module ------------------------------------------------------------
 
 def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
@@ -924,12 +1018,14 @@ def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple
         raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
     header = (HEADER.format(dim=dim) + ("\nimport math" if stress else "") + (THERMAL_IMPORTS if thermal else "")
               + ("\nfrom solver.fused import _reduce_with" if contact else ""))
-    # the vectorised MLS passes: 2D only (in 3D G2P measured slower, P2G no faster: docs/benchmarks.md)
+    # the vectorised passes: 2D only (in 3D MLS's G2P measured slower, its P2G and the kinematics pass no
+    # faster: docs/benchmarks.md)
     mls = dim == 2 and not (thermal or contact)
     header += MLS_IMPORTS if mls else ""
     return "\n".join([header, *_p2g(dim, thermal, contact, stress, contract),
                       *_g2p(dim, thermal, contact, update, contract),
-                      *(_p2g_mls(dim, stress, contract) + _g2p_mls(dim, contract) if mls else [])]) + "\n"
+                      *(_p2g_mls(dim, stress, contract) + _g2p_mls(dim, contract)
+                        + _g2p_kinematics(dim, contract) if mls else [])]) + "\n"
 
 
 def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None = None) -> str:

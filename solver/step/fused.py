@@ -79,6 +79,9 @@ class FusedPhases(Phases):
         self._p2g_mls_variants = {(inline, shared): (fused.constant(sim.loads.any), fused.constant(inline), vector_log,
                                                      fused.constant(shared))
                                   for inline in (False, True) for shared in (False, True)}
+        # MUSL's KINEMATICS pass as `g2p_kinematics` (the same modules; not MLS, whose L_p is B_p D_p^-1)
+        self._has_g2p_kinematics = (hasattr(self._kernels, "g2p_kinematics") and sim.scene.method.scheme == "musl"
+                                    and not (apic and sim.affine.mls))
         self._g2p_variants = {(mode, l_is_c, updates): (self._support, fused.constant(mode), affine, blend, mls,
                                                         fused.constant(l_is_c), fused.constant(updates))
                               for mode in (fused.USL, fused.REMAP, fused.KINEMATICS) for l_is_c in (False, True)
@@ -129,10 +132,14 @@ class FusedPhases(Phases):
         which runs after the same pass). The same bits as the pass with MPM_FMA=0
         (round-off with contraction, the default); the stress read and written
         in the pass that has L_p, instead of L_p and the stress read again by a pass of their own
-        (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle)."""
+        (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle). Not where MUSL's
+        KINEMATICS pass is the vectorised `g2p_kinematics` (`_splits_kinematics`), which has no
+        update: that pass and the material's own were 10 % faster a step on the 2D FLIP block than
+        the scalar pass with the update (docs/benchmarks.md, issue 18, twentieth part)."""
         hooks = self.sim.hooks
-        return (self._has_update_lines and not hooks.after_kinematics
-                and not hooks.after_stress and (self.sim.scene.method.scheme == "musl" or not hooks.after_g2p))
+        musl = self.sim.scene.method.scheme == "musl"
+        return (self._has_update_lines and not hooks.after_kinematics and not hooks.after_stress
+                and (musl or not hooks.after_g2p) and not (musl and self._splits_kinematics()))
 
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
@@ -202,6 +209,9 @@ class FusedPhases(Phases):
         if l_is_c and not updates and self._splits_mls_g2p():
             self._kernels.g2p_mls(*_flat(p.x, p.v, self._affine_matrix, p.F, g.v_new), p.volume, p.volume0,
                                   *self._frame, self._d_inv, dt, sim.copies.momentum.shape[0] + 1, bad)
+        elif mode == fused.KINEMATICS and not updates and self._splits_kinematics():
+            self._kernels.g2p_kinematics(self._support, *_flat(p.x, sim.rate, p.stored("L"), p.F, g.v_new), p.volume,
+                                         p.volume0, *self._frame, dt, sim.copies.momentum.shape[0] + 1, bad)
         else:
             self._g2p_kernel(dt, mode, l_is_c, updates)
         if l_is_c:
@@ -215,6 +225,16 @@ class FusedPhases(Phases):
         p = self.sim.particles
         return self._has_g2p_mls and all(a.flags.c_contiguous for a in (p.x, p.v, self._affine_matrix, p.F,
                                                                          self.sim.grid.v_new))
+
+    def _splits_kinematics(self) -> bool:
+        """Whether MUSL's KINEMATICS pass runs as `g2p_kinematics`, the loop LLVM vectorises
+        (solver/fused_template.py `_g2p_kinematics`; the same bits as `g2p` without `updates`): where
+        the module has it (2D, no conduction or contact), under MUSL without MLS, and the arrays it
+        takes flat views of are C-contiguous."""
+        sim = self.sim
+        p = sim.particles
+        return self._has_g2p_kinematics and all(a.flags.c_contiguous for a in (p.x, sim.rate, p.stored("L"), p.F,
+                                                                                sim.grid.v_new))
 
     def _g2p_kernel(self, dt: float, mode: int, l_is_c: bool, updates: bool) -> None:
         sim = self.sim

@@ -239,7 +239,7 @@ def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(mon
     monkeypatch.delenv(fused_template.FMA, raising=False)   # the default
     assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
     monkeypatch.setenv(fused_template.FMA, "1")
-    assert fused_template.source(2).count(decorator) == 4   # p2g, g2p, p2g_mls and g2p_mls
+    assert fused_template.source(2).count(decorator) == 5   # p2g, g2p, p2g_mls, g2p_mls and g2p_kinematics
     monkeypatch.setenv(fused_template.FMA, "yes")
     with pytest.raises(ValueError, match="MPM_FMA='yes': must be 0"):
         fused_template.source(2)
@@ -473,12 +473,14 @@ def test_the_stress_pass_runs_where_p2g_cannot_form_the_stress(extra):
 # -- the stress updated inside G2P (a rate model whose update is a function of L_p) ---------------
 
 @pytest.mark.parametrize("dimension,method,threads", [
-    (2, "musl-linear-flip", 1), (3, "musl-linear-flip", 2), (2, "usl-quadratic-apic", 2),
+    (3, "musl-linear-flip", 1), (3, "musl-linear-flip", 2), (2, "usl-quadratic-apic", 2),
     (3, "usl-quadratic-mls", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-mls", 1)])
 def test_the_stress_updated_in_g2p_gives_the_stress_pass_bit_for_bit(dimension, method, threads, reproducible):
     """A linear elastic scene's fused G2P (USL's pass, MUSL's kinematics pass) updates sigma_p
     from the L_p it has just formed, and the stress pass does nothing: the same operations in the
-    same order (`reproducible`, as above), so the state is that of the step with the pass, to the bit."""
+    same order (`reproducible`, as above), so the state is that of the step with the pass, to the bit.
+    (In 2D MUSL's kinematics pass without MLS is `g2p_kinematics`, which leaves the update to the
+    material's pass: the tests of the vectorised kinematics pass below.)"""
     method = METHODS.get(method) or {**METHODS["usl-quadratic-mls"], "transfer": "apic"}
     scene = load_scene({**(SCENE_2D if dimension == 2 else SCENE_3D), "method": method,
                         "parallel": {"threads": threads}})
@@ -491,7 +493,7 @@ def test_the_stress_updated_in_g2p_gives_the_stress_pass_bit_for_bit(dimension, 
 @pytest.mark.parametrize("extra,updates", [
     ({"damping": {"type": "viscous", "coefficient": 5.0}}, False),               # after_g2p, after USL's pass
     ({"damping": {"type": "viscous", "coefficient": 5.0},
-      "method": METHODS["musl-linear-flip"]}, True),                             # MUSL: before the kinematics
+      "method": METHODS["musl-quadratic-mls"]}, True),                           # MUSL: before the kinematics
     ({"method": {**METHODS["usl-linear-pic"], "fbar": True}}, False),           # hooks after the kinematics
     ({"materials": {"m": SCENE_2D["materials"]["m"], "n": NEO_HOOKEAN}}, False),   # two materials
     ({"materials": {"m": {**SCENE_2D["materials"]["m"], "model": "j2_plasticity", "yield_stress": 10.0}}},
@@ -593,6 +595,17 @@ def _counted(sim, kernel: str) -> list:
     return calls
 
 
+def assert_one_more_step_the_same_bits(split, one_pass, kernel: str) -> None:
+    """One more step of each: `split` calls its module's `kernel` once, and the particles' state is
+    the same bits in both."""
+    calls = _counted(split, kernel)
+    split.advance(2e-4)
+    one_pass.advance(2e-4)
+    assert len(calls) == 1
+    for name in ("x", "v", "F", "L", "stress", "volume"):
+        assert np.array_equal(getattr(split.particles, name), getattr(one_pass.particles, name)), name
+
+
 @pytest.mark.parametrize("material,threads,contract", [
     (NEO_HOOKEAN, 1, "1"), (NEO_HOOKEAN, 2, "0"), (FLUID, 2, "1"), (LINEAR_FLUID, 1, "0")])
 def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material, threads, contract, monkeypatch):
@@ -604,12 +617,7 @@ def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material,
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
     split, one_pass = stepped_with_and_without(scene, "_splits_mls_g2p")
-    calls = _counted(split, "g2p_mls")
-    split.advance(2e-4)
-    one_pass.advance(2e-4)
-    assert len(calls) == 1
-    for name in ("x", "v", "F", "L", "stress", "volume"):
-        assert np.array_equal(getattr(split.particles, name), getattr(one_pass.particles, name)), name
+    assert_one_more_step_the_same_bits(split, one_pass, "g2p_mls")
 
 
 @pytest.mark.parametrize("change", [
@@ -644,13 +652,19 @@ def test_the_vectorised_mls_pass_names_the_first_inverted_particle_as_the_one_pa
     F_p turned over here reaches G2P finite."""
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
     scene["materials"]["m"] = LINEAR_FLUID
+    assert_the_same_inverted_particle_named(scene, "_splits_mls_g2p")
+
+
+def assert_the_same_inverted_particle_named(scene: dict, switch: str) -> None:
+    """With the fused backend's `switch` on and off, F_p turned over for three particles: the step
+    fails naming the first of them, the same particle both ways."""
     named = []
     for split in (True, False):
         sim = ExplicitMPM(load_scene(scene))
         if not split:
-            sim.phases._splits_mls_g2p = lambda: False
+            setattr(sim.phases, switch, lambda: False)
         sim.advance(2e-4)
-        assert sim.phases._splits_mls_g2p() is split
+        assert getattr(sim.phases, switch)() is split
         n = sim.particles.count
         for p in (n - 4, n - 2, n // 3):   # in the last block, and one earlier (the first block with two threads)
             sim.particles.F[p] = [[-1.0, 0.0], [0.0, 1.0]]
@@ -753,3 +767,52 @@ def test_the_vectorised_mls_p2g_names_the_first_particle_outside_the_grid_as_the
         assert len(calls) == int(vectorised)
         named.append(failure.value.particle_id)
     assert named == [int(sim.particles.id[n // 3 + 70])] * 2
+
+
+# -- MUSL's kinematics pass, vectorised (2D) ------------------------------------------------
+
+@pytest.mark.parametrize("material,method,threads,contract", [
+    (NEO_HOOKEAN, "musl-linear-flip", 1, "1"), (NEO_HOOKEAN, "musl-quadratic-apic", 2, "1"),
+    (FLUID, "musl-linear-flip", 2, "0"), (None, "musl-linear-flip", 2, "0"), (None, "musl-quadratic-apic", 1, "0")])
+def test_the_vectorised_kinematics_pass_gives_the_scalar_kernel_bit_for_bit(material, method, threads, contract,
+                                                                             monkeypatch):
+    """`g2p_kinematics` sums the same products in the same order as `g2p`'s KINEMATICS pass (the rows
+    of the stencil in `_stencil`'s order, `_axis`'s weights and gradients for linear hats and
+    quadratic B-splines), so the state after STEPS steps is the same bits. Linear elasticity (None:
+    the scene's own material) then has its stress updated by its own pass instead of in G2P: the same
+    bits without FMA contraction (`updates_stress`)."""
+    monkeypatch.setenv(fused_template.FMA, contract)
+    scene = copy.deepcopy(SCENE_2D)
+    if material is not None:
+        scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS[method], "parallel": {"threads": threads}})
+    split, one_pass = stepped_with_and_without(scene, "_splits_kinematics")
+    assert not split.phases.updates_stress() and one_pass.phases.updates_stress() is (material is None)
+    assert_one_more_step_the_same_bits(split, one_pass, "g2p_kinematics")
+
+
+@pytest.mark.parametrize("change", [
+    {"dimension": 3},                                          # not measured faster in 3D: not emitted
+    {"method": METHODS["usl-quadratic-flip"]},                 # USL has no KINEMATICS pass
+    {"method": METHODS["musl-quadratic-mls"]},                 # MLS's L_p is B_p D_p^-1
+])
+def test_the_vectorised_kinematics_pass_runs_only_under_musl_without_mls_in_2d(change):
+    """It replaces `g2p`'s KINEMATICS pass under MUSL without MLS, in 2D; elsewhere the scene keeps
+    `g2p`, and linear elasticity its stress update in G2P."""
+    base = {**copy.deepcopy(SCENE_2D), "method": METHODS["musl-linear-flip"]}
+    sim = ExplicitMPM(load_scene(base))
+    assert sim.phases._splits_kinematics() and not sim.phases.updates_stress()
+    other = {**copy.deepcopy(SCENE_3D), "method": METHODS["musl-linear-flip"]} if "dimension" in change \
+        else {**base, **change}
+    sim = ExplicitMPM(load_scene(other))
+    calls = _counted(sim, "g2p_kinematics") if hasattr(sim.phases._kernels, "g2p_kinematics") else []
+    sim.advance(2e-4)
+    assert calls == [] and sim.phases.updates_stress()
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_vectorised_kinematics_pass_names_the_first_inverted_particle_as_the_scalar_kernel(threads):
+    """The vectorised loop counts the particles whose J = det F is not positive and looks for the
+    first one afterwards: the step fails naming the particle `g2p` names."""
+    scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["musl-linear-flip"], "parallel": {"threads": threads}}
+    assert_the_same_inverted_particle_named(scene, "_splits_kinematics")
