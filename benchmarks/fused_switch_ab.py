@@ -78,7 +78,8 @@ def compare(switch: str, block: str, dim: int, threads: int, rounds: int, steps:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--switch", choices=("updates_stress", "forms_stress", "folds_force", "_splits_kinematics"), default="updates_stress")
+    parser.add_argument("--switch", default="updates_stress",
+                        choices=("updates_stress", "forms_stress", "folds_force", "_splits_kinematics"))
     parser.add_argument("--block", choices=("flip", "apic", "mls", "mpm88"), default="flip")
     parser.add_argument("--dims", nargs="+", type=int, default=[2, 3])
     parser.add_argument("--threads", nargs="+", type=int, default=[1, 2])
