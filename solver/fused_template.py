@@ -4,9 +4,10 @@ One template serves every dimension. `source(dim)` returns the text of a module
 with the two kernels, `p2g` and `g2p` (in 2D also `g2p_mls`, MLS's USL pass written so
 that LLVM vectorises it: `_g2p_mls`, `p2g_mls`, MLS's folded P2G with its work per
 particle vectorised: `_p2g_mls`, and `g2p_kinematics`, MUSL's KINEMATICS pass without MLS
-vectorised: `_g2p_kinematics`), in which the loops over the stencil are
-nested once per axis and every per-axis and per-component statement is written
-out: scalars only, the form the hand-written 2D and 3D kernels had (a kernel
+vectorised: `_g2p_kinematics`; in 3D `p2g_lanes` and `g2p_lanes`, MLS's folded P2G and
+USL pass with a node's values in the four lanes of one vector, solver/lanes.py: `_p2g_lanes`),
+in which the loops over the stencil are nested once per axis and every per-axis and
+per-component statement is written out: scalars only, the form the hand-written 2D and 3D kernels had (a kernel
 generic over the dimension, with per-axis data in small arrays, was measured
 slower; docs/internals.md). `load(dim)` writes that text to
 fused_{dim}d_<hash of the text>.py in the user's cache folder
@@ -89,6 +90,11 @@ from solver.fused import _TOUCH as TOUCH
 from solver.near_one_log import HIGH as LOG_HIGH, LOW as LOG_LOW, log_near_one
 
 CHUNK = {chunk}""".format(chunk=CHUNK)
+LANES_IMPORTS = """
+from solver.lanes import lanes_of, load_row, pack_velocity, split, unpack_mass_momentum
+from solver.lanes import {operations} as _lane_operations
+
+axpy, add_to_row = _lane_operations.axpy, _lane_operations.add_to_row"""
 THERMAL_IMPORTS = """
 from solver.fused import _reduce_with
 from solver.threads import own_zeroed"""
@@ -345,7 +351,7 @@ def _momentum_row(dim: int) -> list[str]:
             for a, c in enumerate(AXES[:dim])]
 
 
-def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) -> list[str]:
+def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None, lanes: bool = False) -> list[str]:
     mc = [f"mc{a}{b}" for a in range(dim) for b in range(dim)]
     return [
         *_stress_of_particle(dim, stress),   # first: little is live across its log()
@@ -379,10 +385,11 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None) 
            "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
            f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
         *_field_shift(contact),
-        "if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum",
-        "    wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)",
-        *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact,
-                  row_start=_p2g_row(dim)),
+        *(_p2g_lanes_stencil(dim) if lanes else [
+            "if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum",
+            "    wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)",
+            *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact,
+                      row_start=_p2g_row(dim))]),
     ]
 
 
@@ -1000,6 +1007,75 @@ def _g2p_kinematics(dim: int, contract: bool) -> list[str]:
             "                    break"]
 
 
+# -- MLS in 3D, a node's values in four lanes -------------------------------------------
+
+def _p2g_lanes_stencil(dim: int) -> list[str]:
+    """`_p2g_particle`'s stencil for MLS's folded P2G with a node's (m, mv_x, mv_y, mv_z) added
+    as one float64x4 (solver/lanes.py) into the thread's (n, 4) rows `gl`: the node's m and
+    r{c} + mc{c}0 dx (`_p2g_node`) are lanes base + dx column, the mass lane's column entry 0
+    (m + 0 dx is m), so that every lane does `p2g`'s operations on its component."""
+    return ["column = lanes_of(0.0, mc00, mc10, mc20)",
+            *_stencil(dim, [f"w = wx[i] * {_outer(dim)}", "dx = (i - fx) * h0",
+                            "add_to_row(gl, node, w, axpy(dx, column, base))"], gradients=False, contact=False,
+                      row_start=[*_momentum_row(dim), "base = lanes_of(m, rx, ry, rz)"])]
+
+
+def _p2g_lanes(stress: tuple | None, contract: bool) -> list[str]:
+    return _shell(
+        "p2g_lanes(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,\n"
+        "        grid_mass, grid_mom, lanes, bad, dt)",
+        "`p2g` for MLS's folded P2G in 3D (quadratic B-splines), each thread adding a node's\n"
+        "    (m, mv_x, mv_y, mv_z) as one vector into its rows of `lanes` (threads, n, 4; zeroed here),\n"
+        "    which are then summed into grid_mass and grid_mom in thread order: the same bits as `p2g`.\n\n"
+        "    variant: `p2g`'s, with affine, mls and fold set.",
+        ["support, affine_, loaded_, mls_, fold_, inline_ = variant",
+         *_parameters(stress),
+         *_frame(3),
+         "d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]",
+         "threads = lanes.shape[0]",
+         "shared_acc = acc.shape[0] == 1"],
+        ["S, affine, loaded, mls = support.ndim - 1, True, loaded_.ndim == 2, True   # compile-time constants",
+         "fold, inline = True, inline_.ndim == 2",
+         "gl = lanes[t]",
+         "gl[:, :] = 0.0   # (by the thread that adds into them)"],
+        _p2g_particle(3, False, False, stress, lanes=True),
+        ["unpack_mass_momentum(grid_mass, grid_mom, lanes)"], contract)
+
+
+def _g2p_lanes(contract: bool) -> list[str]:
+    """MLS's USL pass in 3D (`g2p` with quadratic B-splines, mls, l_is_c, no blend or update),
+    each node's velocity gathered as one float64x4: s and t (`_g2p_gather`), v_p and B_p's
+    columns b{a}0, b{a}1, b{a}2 (`_g2p_row_end`) are vectors with a lane per component."""
+    zero = "lanes_of(0.0, 0.0, 0.0, 0.0)"
+    return _shell(
+        "g2p_lanes(x, v, C, F, volume, volume0, frame, v_new, v_lanes, dt, d_inv, threads, bad)",
+        "`g2p`'s USL pass for MLS in 3D: v_p, C_p = B_p D_p^-1, x_p; F_p and V_p from L_p = C_p (not\n"
+        "    written: solver/step/fused.py defers it), the nodes' velocities read as (v_x, v_y, v_z, 0)\n"
+        "    rows of v_lanes (n, 4; packed here from v_new). The same bits as `g2p`.",
+        [*_frame(3), "d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]", "pack_velocity(v_new, v_lanes)"],
+        ["S = 3   # quadratic B-splines"],
+        [*_axes(3, ok=False),
+         f"vp = b0 = b1 = b2 = {zero}   # v_p and B_p's columns, a lane per component",
+         f"wdx = {_each('wx[{a}] * (({a} - fx) * h0)', 3)}",
+         *_stencil(3, ["v_node = load_row(v_lanes, node)", "s = axpy(wx[i], v_node, s)",
+                       "tw = axpy(wdx[i], v_node, tw)"], gradients=False, contact=False,
+                   row_start=[f"s = tw = {zero}"],
+                   row_end=["vp = axpy(wo, s, vp)", "b0 = axpy(wo, tw, b0)", "b1 = axpy(wo * dy, s, b1)",
+                            "b2 = axpy(wo * dz, s, b2)"]),
+         "vpx, vpy, vpz, _ = split(vp)",
+         *[f"b0{b}, b1{b}, b2{b}, _ = split(b{b})" for b in range(3)],
+         "v[p, 0], v[p, 1], v[p, 2] = vpx, vpy, vpz",
+         *_tensor("C[p, {a}, {b}] = b{a}{b} * d_inv{b}", 3),
+         *_each_line("x[p, {a}] += dt * vp{c}", 3),
+         *_tensor("l{a}{b} = b{a}{b} * d_inv{b}", 3),
+         *_deformation_gradient(3),
+         f"J = {_determinant([0, 1, 2], [0, 1, 2])}",
+         "volume[p] = J * volume0[p]",
+         "if J <= 0.0 and bad[t] < 0:",
+         "    bad[t] = p"],
+        [], contract)
+
+
 # -- the generated module ------------------------------------------------------------
 
 def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple | None = None,
@@ -1018,14 +1094,18 @@ def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple
         raise ValueError("conduction with contact fields runs on the general backend (solver/fused_scope.py)")
     header = (HEADER.format(dim=dim) + ("\nimport math" if stress else "") + (THERMAL_IMPORTS if thermal else "")
               + ("\nfrom solver.fused import _reduce_with" if contact else ""))
-    # the vectorised passes: 2D only (in 3D MLS's G2P measured slower, its P2G and the kinematics pass no
-    # faster: docs/benchmarks.md)
+    # the passes vectorised across particles: 2D only (in 3D MLS's G2P measured slower, its P2G and the
+    # kinematics pass no faster: docs/benchmarks.md); 3D's MLS vectorises within a node instead
     mls = dim == 2 and not (thermal or contact)
     header += MLS_IMPORTS if mls else ""
+    # MLS in 3D: a node's values in four lanes (solver/lanes.py)
+    lanes = dim == 3 and not (thermal or contact)
+    header += LANES_IMPORTS.format(operations="contracted" if contract else "exact") if lanes else ""
     return "\n".join([header, *_p2g(dim, thermal, contact, stress, contract),
                       *_g2p(dim, thermal, contact, update, contract),
                       *(_p2g_mls(dim, stress, contract) + _g2p_mls(dim, contract)
-                        + _g2p_kinematics(dim, contract) if mls else [])]) + "\n"
+                        + _g2p_kinematics(dim, contract) if mls else []),
+                      *(_p2g_lanes(stress, contract) + _g2p_lanes(contract) if lanes else [])]) + "\n"
 
 
 def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None = None) -> str:

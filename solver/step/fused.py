@@ -79,6 +79,10 @@ class FusedPhases(Phases):
         self._p2g_mls_variants = {(inline, shared): (fused.constant(sim.loads.any), fused.constant(inline), vector_log,
                                                      fused.constant(shared))
                                   for inline in (False, True) for shared in (False, True)}
+        # MLS in 3D as `p2g_lanes` and `g2p_lanes`, a node's values in four lanes (the modules that have them)
+        self._has_lanes = (hasattr(self._kernels, "p2g_lanes") and apic and sim.affine.mls and sim.flip_ratio == 0.0
+                           and self._support.ndim - 1 == 3)
+        self._node_lanes = self._velocity_lanes = np.zeros((0, 0, 4))
         # MUSL's KINEMATICS pass as `g2p_kinematics` (the same modules; not MLS, whose L_p is B_p D_p^-1)
         self._has_g2p_kinematics = (hasattr(self._kernels, "g2p_kinematics") and sim.scene.method.scheme == "musl"
                                     and not (apic and sim.affine.mls))
@@ -155,6 +159,10 @@ class FusedPhases(Phases):
             self._kernels.p2g_mls(variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"),
                                   *_flat(p.F, L), p.volume0, self._stress_parameters, *_flat(acc), *self._frame,
                                   self._d_inv, g.mass, g.momentum, c.mass, c.momentum, bad, self.dt)
+        elif fold and self._uses_lanes():
+            self._kernels.p2g_lanes(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
+                                    p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
+                                    self._d_inv, g.mass, g.momentum, self._lanes()[0], bad, self.dt)
         else:
             self._kernels.p2g(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
                               p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
@@ -163,6 +171,24 @@ class FusedPhases(Phases):
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _uses_lanes(self) -> bool:
+        """Whether MLS in 3D runs as `p2g_lanes` (its folded P2G) and `g2p_lanes` (its USL pass, C_p as
+        L_p, no stress update), a node's values in four lanes of one vector (solver/lanes.py,
+        solver/fused_template.py `_p2g_lanes`; the same bits as `p2g` and `g2p`): where the module
+        has them (3D, no conduction or contact) and the scene's transfer is MLS with quadratic
+        B-splines and no FLIP blend (`g2p_lanes` has none)."""
+        return self._has_lanes
+
+    def _lanes(self) -> tuple[np.ndarray, np.ndarray]:
+        """The (threads, n_nodes, 4) rows `p2g_lanes` adds into and the (n_nodes, 4) velocities
+        `g2p_lanes` reads, (re)allocated when the grid is placed anew (their contents are
+        written by the kernels before they are read)."""
+        n, threads = self.sim.grid.n_nodes, self.sim.threads
+        if self._node_lanes.shape != (threads, n, 4):
+            self._node_lanes = np.empty((threads, n, 4))
+            self._velocity_lanes = np.empty((n, 4))
+        return self._node_lanes, self._velocity_lanes
 
     def _vectorises_mls_p2g(self, *more: np.ndarray) -> bool:
         """Whether MLS's folded P2G runs as `p2g_mls`, its work per particle vectorised
@@ -209,6 +235,9 @@ class FusedPhases(Phases):
         if l_is_c and not updates and self._splits_mls_g2p():
             self._kernels.g2p_mls(*_flat(p.x, p.v, self._affine_matrix, p.F, g.v_new), p.volume, p.volume0,
                                   *self._frame, self._d_inv, dt, sim.copies.momentum.shape[0] + 1, bad)
+        elif l_is_c and not updates and self._uses_lanes():
+            self._kernels.g2p_lanes(p.x, p.v, self._affine_matrix, p.F, p.volume, p.volume0, self._frame, g.v_new,
+                                    self._lanes()[1], dt, self._d_inv, sim.threads, bad)
         elif mode == fused.KINEMATICS and not updates and self._splits_kinematics():
             self._kernels.g2p_kinematics(self._support, *_flat(p.x, sim.rate, p.stored("L"), p.F, g.v_new), p.volume,
                                          p.volume0, *self._frame, dt, sim.copies.momentum.shape[0] + 1, bad)

@@ -237,7 +237,7 @@ def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(mon
     assert "fastmath" not in fused_template.source(3)
     decorator = "@njit(parallel=True, cache=True, fastmath={'contract'})".replace("'", '"')
     monkeypatch.delenv(fused_template.FMA, raising=False)   # the default
-    assert fused_template.source(3).count(decorator) == 2   # p2g and g2p
+    assert fused_template.source(3).count(decorator) == 4   # p2g, g2p, p2g_lanes and g2p_lanes
     monkeypatch.setenv(fused_template.FMA, "1")
     assert fused_template.source(2).count(decorator) == 5   # p2g, g2p, p2g_mls, g2p_mls and g2p_kinematics
     monkeypatch.setenv(fused_template.FMA, "yes")
@@ -595,6 +595,13 @@ def _counted(sim, kernel: str) -> list:
     return calls
 
 
+def neo_hookean_mls(base: dict) -> dict:
+    """The scene `base` of neo-Hookean bodies, stepped with MLS under USL."""
+    scene = {**copy.deepcopy(base), "method": METHODS["usl-quadratic-mls"]}
+    scene["materials"]["m"] = NEO_HOOKEAN
+    return scene
+
+
 def assert_one_more_step_the_same_bits(split, one_pass, kernel: str) -> None:
     """One more step of each: `split` calls its module's `kernel` once, and the particles' state is
     the same bits in both."""
@@ -629,15 +636,10 @@ def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material,
 def test_the_vectorised_mls_pass_runs_only_for_mls_under_usl_in_2d(change):
     """It replaces the one-pass kernel only where that one would not write L_p (MLS, USL, the stress
     formed in P2G) nor update the stress, in 2D: elsewhere the scene keeps `g2p`."""
-    base = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"]}
-    base["materials"]["m"] = NEO_HOOKEAN
+    base = neo_hookean_mls(SCENE_2D)
     sim = ExplicitMPM(load_scene(base))
     assert sim.phases._splits_mls_g2p()
-    if change.get("dimension") == 3:
-        other = {**copy.deepcopy(SCENE_3D), "method": METHODS["usl-quadratic-mls"]}
-        other["materials"]["m"] = NEO_HOOKEAN
-    else:
-        other = {**base, **change}
+    other = neo_hookean_mls(SCENE_3D) if change.get("dimension") == 3 else {**base, **change}
     sim = ExplicitMPM(load_scene(other))
     calls = _counted(sim, "g2p_mls") if hasattr(sim.phases._kernels, "g2p_mls") else []
     sim.advance(2e-4)
@@ -667,7 +669,7 @@ def assert_the_same_inverted_particle_named(scene: dict, switch: str) -> None:
         assert getattr(sim.phases, switch)() is split
         n = sim.particles.count
         for p in (n - 4, n - 2, n // 3):   # in the last block, and one earlier (the first block with two threads)
-            sim.particles.F[p] = [[-1.0, 0.0], [0.0, 1.0]]
+            sim.particles.F[p] = np.diag([-1.0] + [1.0] * (sim.scene.dimension - 1))
         with pytest.raises(Instability, match="J = det F") as failure:
             sim.advance(2e-4)
         named.append(failure.value.particle_id)
@@ -752,21 +754,29 @@ def test_the_vectorised_mls_p2g_names_the_first_particle_outside_the_grid_as_the
     for the first: the step fails naming the particle `p2g` names."""
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
     scene["materials"]["m"] = NEO_HOOKEAN
+    assert_the_same_particle_named_outside_the_grid(scene, "_vectorises_mls_p2g", "p2g_mls", lambda n: (
+        (n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])))
+
+
+def assert_the_same_particle_named_outside_the_grid(scene: dict, switch: str, kernel: str, moved) -> None:
+    """With the fused backend's `switch` on and off, the particles `moved(count)` names put where it
+    says (index, position): the step fails naming the first of them, the same particle both ways,
+    and `kernel` runs only with the switch on."""
     named = []
-    for vectorised in (True, False):
+    for on in (True, False):
         sim = ExplicitMPM(load_scene(scene))
-        if not vectorised:
-            sim.phases._vectorises_mls_p2g = lambda *arrays: False
+        if not on:
+            setattr(sim.phases, switch, lambda *arrays: False)
         sim.advance(2e-4)
-        n = sim.particles.count
-        for p, x in ((n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])):
+        places = moved(sim.particles.count)
+        for p, x in places:
             sim.particles.x[p] = x
-        calls = _counted(sim, "p2g_mls")
+        calls = _counted(sim, kernel)
         with pytest.raises(Instability, match="left the grid") as failure:
             sim.advance(2e-4)
-        assert len(calls) == int(vectorised)
+        assert len(calls) == int(on)
         named.append(failure.value.particle_id)
-    assert named == [int(sim.particles.id[n // 3 + 70])] * 2
+    assert named == [int(sim.particles.id[min(p for p, _ in places)])] * 2
 
 
 # -- MUSL's kinematics pass, vectorised (2D) ------------------------------------------------
@@ -816,3 +826,61 @@ def test_the_vectorised_kinematics_pass_names_the_first_inverted_particle_as_the
     first one afterwards: the step fails naming the particle `g2p` names."""
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["musl-linear-flip"], "parallel": {"threads": threads}}
     assert_the_same_inverted_particle_named(scene, "_splits_kinematics")
+
+
+# -- MLS in 3D, a node's values in four lanes ------------------------------------------------
+
+@pytest.mark.parametrize("material,threads,contract,gathers", [
+    (NEO_HOOKEAN, 1, "1", True), (NEO_HOOKEAN, 2, "0", True), (FLUID, 2, "1", True), (LINEAR_FLUID, 1, "0", True),
+    (None, 2, "1", False)])   # linear elasticity: its stress read in P2G, updated in G2P (`g2p` keeps it)
+def test_the_lanes_kernels_give_the_scalar_kernels_bit_for_bit(material, threads, contract, gathers, monkeypatch):
+    """`p2g_lanes` adds a node's (m, mv) as lanes of one vector, each lane doing `p2g`'s operations on
+    its component, and sums the threads' rows in `_reduce_mass_momentum`'s order; `g2p_lanes` gathers
+    a node's velocity as one vector, each lane doing `g2p`'s. After STEPS steps of the collision
+    under gravity the state is the same bits, with FMA contraction and without."""
+    monkeypatch.setenv(fused_template.FMA, contract)
+    scene = copy.deepcopy(SCENE_3D)
+    if material is not None:
+        scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
+    lanes, scalar = stepped_with_and_without(scene, "_uses_lanes")
+    gathered = _counted(lanes, "g2p_lanes")
+    assert_one_more_step_the_same_bits(lanes, scalar, "p2g_lanes")
+    assert len(gathered) == int(gathers)
+    assert np.array_equal(lanes.phases._affine_matrix, scalar.phases._affine_matrix)
+    assert np.array_equal(lanes.grid.momentum, scalar.grid.momentum)
+
+
+@pytest.mark.parametrize("change,scatters,gathers", [
+    ({"method": METHODS["musl-quadratic-mls"]}, True, False),            # MUSL's passes are `g2p`'s
+    ({"method": {**METHODS["usl-quadratic-mls"], "transfer": "apic"}}, False, False),
+    ({"damping": {"type": "viscous", "coefficient": 5.0}}, False, True),  # damping reads f_I: not folded
+    ({"dimension": 2}, False, False),                                   # 2D has its own vectorised passes
+])
+def test_the_lanes_kernels_run_for_mls_in_3d_only(change, scatters, gathers):
+    scene = neo_hookean_mls(SCENE_2D) if change.get("dimension") == 2 else {**neo_hookean_mls(SCENE_3D), **change}
+    sim = ExplicitMPM(load_scene(scene))
+    has = hasattr(sim.phases._kernels, "p2g_lanes")
+    assert has is (sim.scene.dimension == 3)
+    scattered = _counted(sim, "p2g_lanes") if has else []
+    gathered = _counted(sim, "g2p_lanes") if has else []
+    sim.advance(2e-4)
+    assert (len(scattered), len(gathered)) == (int(scatters), int(gathers))
+
+
+def test_a_conducting_3d_scene_has_no_lanes_kernels():
+    assert "p2g_lanes" not in fused_template.source(3, thermal=True)
+    assert "p2g_lanes" not in fused_template.source(3, contact=True)
+    assert "p2g_lanes" in fused_template.source(3)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_lanes_kernels_name_the_first_failing_particle_as_the_scalar_kernels(threads):
+    """`g2p_lanes` names the first particle whose J = det F is not positive, `p2g_lanes` the first
+    outside the grid, as `g2p` and `p2g` do (the fluid's stress reads V_p / V0_p, not F_p, so the
+    F_p turned over reaches G2P finite)."""
+    scene = {**copy.deepcopy(SCENE_3D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
+    scene["materials"]["m"] = LINEAR_FLUID
+    assert_the_same_inverted_particle_named(scene, "_uses_lanes")
+    assert_the_same_particle_named_outside_the_grid(scene, "_uses_lanes", "p2g_lanes", lambda n: (
+        (n - 3, [2.0, 0.2, 0.2]), (n - 1, [float("nan"), 0.2, 0.2]), (n // 3, [0.5, -1.0, 0.2])))
