@@ -6,6 +6,7 @@ f_I formed apart, taking turns (so a shared machine's load hits both alike).
     python benchmarks/fused_switch_ab.py                                  # updates_stress, FLIP block
     python benchmarks/fused_switch_ab.py --switch _splits_kinematics --dims 2   # MUSL's vectorised pass
     python benchmarks/fused_switch_ab.py --switch forms_stress --block mls --dims 2 --threads 1 2
+    python benchmarks/fused_switch_ab.py --switch _uses_lanes --block mls --dims 3   # 3D MLS in four lanes
 
 The blocks are benchmarks/throughput.py's: "flip" its part-2 block (linear elastic, linear hats,
 MUSL, FLIP 0.99), "apic" / "mls" its side-by-side block (neo-Hookean, quadratic B-splines, USL),
@@ -15,10 +16,10 @@ ns per particle-step with the switch on and off (median and best of the rounds) 
 (above 1: the switch makes the step faster). Both copies end in the same state to round-off
 (tests/unit/test_fused.py checks it: folds_force joins the force's sum to the momentum's, and
 with FMA contraction, the default, a fused kernel may fuse a multiply and an add that a
-material's own pass does not; the other switches keep the bits with MPM_FMA=0); this script
-checks the positions to 1e-12. A switch that is off for a block (updates_stress on the 2D FLIP
-block, whose KINEMATICS pass is the vectorised `g2p_kinematics`, without the update) gets a row
-that says so.
+material's own pass does not; the other switches keep the bits with MPM_FMA=0, and _uses_lanes
+with contraction too); this script checks the positions to 1e-12. A switch that is off for a
+block (updates_stress on the 2D FLIP block, whose KINEMATICS pass is the vectorised
+`g2p_kinematics`, without the update) gets a row that says so.
 """
 from __future__ import annotations
 
@@ -79,7 +80,8 @@ def compare(switch: str, block: str, dim: int, threads: int, rounds: int, steps:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--switch", default="updates_stress",
-                        choices=("updates_stress", "forms_stress", "folds_force", "_splits_kinematics"))
+                        choices=("updates_stress", "forms_stress", "folds_force", "_splits_kinematics",
+                                 "_uses_lanes"))
     parser.add_argument("--block", choices=("flip", "apic", "mls", "mpm88"), default="flip")
     parser.add_argument("--dims", nargs="+", type=int, default=[2, 3])
     parser.add_argument("--threads", nargs="+", type=int, default=[1, 2])

@@ -7,9 +7,9 @@ particle vectorised: `_p2g_mls`, and `g2p_kinematics`, MUSL's KINEMATICS pass wi
 vectorised: `_g2p_kinematics`; in 3D `p2g_lanes` and `g2p_lanes`, MLS's folded P2G and
 USL pass with a node's values in the four lanes of one vector, solver/lanes.py: `_p2g_lanes`),
 in which the loops over the stencil are nested once per axis and every per-axis and
-per-component statement is written out: scalars only, the form the hand-written 2D and 3D kernels had (a kernel
-generic over the dimension, with per-axis data in small arrays, was measured
-slower; docs/internals.md). `load(dim)` writes that text to
+per-component statement is written out: scalars only, the form the hand-written 2D and 3D
+kernels had (a kernel generic over the dimension, with per-axis data in small arrays, was
+measured slower; docs/internals.md). `load(dim)` writes that text to
 fused_{dim}d_<hash of the text>.py in the user's cache folder
 (~/.cache/mpm-solver/fused, else a folder in the system's temporary one) unless
 it is there already, and imports it; numba's cache (`cache=True`) keys on that
