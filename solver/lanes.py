@@ -50,7 +50,8 @@ def _vector(builder, values):
 
 
 def _rows_of_four(array) -> bool:
-    """Whether a kernel's argument is what the row intrinsics assume: C-contiguous (n, 4) float64."""
+    """Whether a kernel's argument is what the row intrinsics assume: a C-contiguous 2D float64 array
+    (of rows of 4: the width is not part of numba's type, so the callers allocate (n, 4) rows)."""
     return isinstance(array, types.Array) and array.ndim == 2 and array.layout == "C" and array.dtype == types.float64
 
 
@@ -82,9 +83,12 @@ def split(typingctx, lanes):
 def load_row(typingctx, array, row):
     """array[row, 0:4] of a C-contiguous (n, 4) float64 array as one float64x4 (no bounds check,
     as numba's own indexing)."""
+    if not _rows_of_four(array):
+        return None
+
     def codegen(context, builder, signature, args):
         return builder.load(_row(context, builder, signature.args[0], *args), align=8)
-    return float64x4(array, row) if _rows_of_four(array) else None, codegen
+    return float64x4(array, row), codegen
 
 
 def _operations(flags: tuple) -> SimpleNamespace:
@@ -102,11 +106,14 @@ def _operations(flags: tuple) -> SimpleNamespace:
     @intrinsic
     def add_to_row(typingctx, array, row, a, x):
         """array[row, 0:4] += a * x, in one load and one store (the scatter of a node)."""
+        if not _rows_of_four(array):
+            return None
+
         def codegen(context, builder, signature, args):
             pointer = _row(context, builder, signature.args[0], args[0], args[1])
             builder.store(multiply_add(builder, args[2], args[3], builder.load(pointer, align=8)), pointer, align=8)
             return context.get_dummy_value()
-        return types.none(array, row, types.float64, float64x4) if _rows_of_four(array) else None, codegen
+        return types.none(array, row, types.float64, float64x4), codegen
 
     return SimpleNamespace(axpy=axpy, add_to_row=add_to_row)
 
