@@ -536,22 +536,30 @@ def _logged(stress: tuple | None) -> list[str]:
     return sorted({name for line in (stress[1] if stress else ()) for name in LOG_CALL.findall(line)})
 
 
-def _p2g_mls_scatter(dim: int) -> list[str]:
-    """The nodes of particle c + k from the buffers, as `_p2g_node` adds them with fold and mls."""
+def _p2g_mls_scatter(dim: int, lanes: bool) -> list[str]:
+    """The nodes of particle c + k from the buffers, as `_p2g_node` adds them with fold and mls;
+    with `lanes` a node's (m, mv_x, mv_y, 0) as one float64x4 into the thread's rows `gl`, as
+    `_p2g_lanes_stencil` adds 3D's (each lane does the scalar operations on its component)."""
     fields = _p2g_mls_fields(dim)
     weights = [f"w{c} = " + ", ".join(f"buf[{fields.index(f'w{c}{n}')}, k]" for n in range(3)) for c in AXES[:dim]]
-    node = [f"w = wx[i] * {_outer(dim)}",
-            "dx = (i - fx) * h0",
-            *[f"p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
-            _scatter("gm", "node", "+=", "w * m"),
-            *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)]]
+    node = [f"w = wx[i] * {_outer(dim)}", "dx = (i - fx) * h0"]
+    row = _momentum_row(dim)
+    if lanes:
+        pad = ", 0.0" * (3 - dim)
+        node += ["add_to_row(gl, node, w, axpy(dx, column, base))"]
+        row += [f"base = lanes_of(m, {_each('r{c}', dim)}{pad})"]
+    else:
+        node += [*[f"p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
+                 _scatter("gm", "node", "+=", "w * m"),
+                 *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)]]
+    column = [f"column = lanes_of(0.0, {_each('mc{a}0', dim)}{', 0.0' * (3 - dim)})"] if lanes else []
     return [*[f"i{c} = first[{a}, k]" for a, c in enumerate(AXES[:dim])],
             *[f"{name} = buf[{n}, k]" for n, name in enumerate(fields) if not name.startswith("w")],
-            *weights,
-            *_stencil(dim, node, gradients=False, contact=False, row_start=_momentum_row(dim))]
+            *weights, *column,
+            *_stencil(dim, node, gradients=False, contact=False, row_start=row)]
 
 
-def _p2g_mls_chunk(dim: int, stress: tuple | None) -> list[str]:
+def _p2g_mls_chunk(dim: int, stress: tuple | None, lanes: bool) -> list[str]:
     """One chunk of a thread's block: the vectorised pass, the rare passes after it (log outside its
     interval, a particle outside the grid), the scalar scatter."""
     fix = ["if far:   # (a log outside log_near_one's interval) formed again with math.log",
@@ -576,7 +584,7 @@ def _p2g_mls_chunk(dim: int, stress: tuple | None) -> list[str]:
         "                bad[t] = p",
         *_indent(zeroed, 3),
         "for k in range(n):",
-        *_indent(_p2g_mls_scatter(dim), 1),
+        *_indent(_p2g_mls_scatter(dim, lanes), 1),
     ]
 
 
@@ -589,17 +597,21 @@ def _flat_frame(dim: int) -> list[str]:
             f"{_each('d_inv{a}', dim)} = {_each('d_inv[{a}]', dim)}"]
 
 
-def _p2g_mls(dim: int, stress: tuple | None, contract: bool) -> list[str]:
+def _p2g_mls(dim: int, stress: tuple | None, contract: bool, lanes: bool = False) -> list[str]:
     """`p2g` for MLS with the force folded (`fold`) and quadratic B-splines, its work per particle
     in a loop LLVM vectorises: per chunk of CHUNK particles, sigma_p (with log_near_one for log J:
     a call to libm keeps a loop scalar), the weights, m v_p and m C_p - dt V sigma_p D_p^-1 for 8
     particles at a time into small buffers, then the scatter, which cannot be vectorised (the
-    particles of a loop add into the same nodes), reads them. The same bits as `p2g`."""
+    particles of a loop add into the same nodes), reads them. The same bits as `p2g`.
+    `lanes`: `p2g_mls_lanes`, the scatter adding a node's values as one float64x4 into the
+    thread's rows of `lanes` (threads, n, 4; zeroed here), summed into the grid in thread order
+    as `p2g_lanes` does: the same bits again."""
     options = f", fastmath={CONTRACT}" if contract else ""
     frame = _flat_frame(dim)
+    name, targets = ("p2g_mls_lanes", "lanes") if lanes else ("p2g_mls", "copies_mass, copies_mom")
     return ["", "", f"@njit(parallel=True, cache=True{options})",
-            "def p2g_mls(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, lower, h, inv_h, cells,\n"
-            "            strides, offset, d_inv, grid_mass, grid_mom, copies_mass, copies_mom, bad, dt):",
+            f"def {name}(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, lower, h, inv_h, cells,\n"
+            f"            strides, offset, d_inv, grid_mass, grid_mom, {targets}, bad, dt):",
             '    """m_I and (mv)_I + dt f_I as `p2g` with `fold` and `mls` forms them (the same bits), on flat\n'
             "    views: x, v and acc dim entries a row (acc one row when shared), C, F and L dim^2. variant:\n"
             "    (loaded, inline, vector_log, shared_acc) constants; vector_log: log_near_one is libm's log\n"
@@ -608,20 +620,22 @@ def _p2g_mls(dim: int, stress: tuple | None, contract: bool) -> list[str]:
             "    loaded_, inline_, vector_log_, shared_acc_ = variant",
             *_indent(_parameters(stress), 1),
             *_indent(frame, 1),
-            "    threads = copies_mass.shape[0] + 1",
+            "    threads = " + ("lanes.shape[0]" if lanes else "copies_mass.shape[0] + 1"),
             f"    {_each('acc0{c}', dim)} = ({_each('acc[{a}]', dim)}) if acc.shape[0] >= {dim} else ({_each('0.0', dim)})",
             "    bounds = block_bounds(volume.shape[0], threads)",
             "    for t in prange(threads):",
             "        S, loaded, inline = 3, loaded_.ndim == 2, inline_.ndim == 2   # compile-time constants",
             "        vector_log, shared_acc = vector_log_.ndim == 2, shared_acc_.ndim == 2",
-            "        gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)",
+            *(["        gl = lanes[t]", "        gl[:, :] = 0.0   # (by the thread that adds into them)"] if lanes else
+              ["        gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)"]),
             f"        first, buf = np.empty(({dim}, CHUNK), dtype=np.int64), np.empty(({len(_p2g_mls_fields(dim))}, CHUNK))",
             "        bad[t] = -1",
             "        start = max(bounds[t], 0)",
             "        total = bounds[t + 1] - start",
             "        for chunk in range((total + CHUNK - 1) // CHUNK):",
-            *_indent(_p2g_mls_chunk(dim, stress), 3),
-            "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)"]
+            *_indent(_p2g_mls_chunk(dim, stress, lanes), 3),
+            "    " + ("unpack_mass_momentum(grid_mass, grid_mom, lanes)" if lanes else
+                     "_reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)")]
 
 
 # -- G2P ---------------------------------------------------------------------------
@@ -1098,14 +1112,14 @@ def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple
     # kinematics pass no faster: docs/benchmarks.md); 3D's MLS vectorises within a node instead
     mls = dim == 2 and not (thermal or contact)
     header += MLS_IMPORTS if mls else ""
-    # MLS in 3D: a node's values in four lanes (solver/lanes.py)
-    lanes = dim == 3 and not (thermal or contact)
+    # MLS in 3D, and 2D's P2G scatter: a node's values in four lanes (solver/lanes.py)
+    lanes = not (thermal or contact)
     header += LANES_IMPORTS.format(operations="contracted" if contract else "exact") if lanes else ""
     return "\n".join([header, *_p2g(dim, thermal, contact, stress, contract),
                       *_g2p(dim, thermal, contact, update, contract),
-                      *(_p2g_mls(dim, stress, contract) + _g2p_mls(dim, contract)
-                        + _g2p_kinematics(dim, contract) if mls else []),
-                      *(_p2g_lanes(stress, contract) + _g2p_lanes(contract) if lanes else [])]) + "\n"
+                      *(_p2g_mls(dim, stress, contract) + _p2g_mls(dim, stress, contract, lanes=True)
+                        + _g2p_mls(dim, contract) + _g2p_kinematics(dim, contract) if mls else []),
+                      *(_p2g_lanes(stress, contract) + _g2p_lanes(contract) if lanes and dim == 3 else [])]) + "\n"
 
 
 def _stem(dim: int, thermal: bool, contact: bool, stress: tuple | None, update: tuple | None = None) -> str:

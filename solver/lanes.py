@@ -131,9 +131,10 @@ def pack_velocity(v_new, v_lanes):
 
 @njit(parallel=True, cache=True)
 def unpack_mass_momentum(grid_mass, grid_mom, lanes):
-    """grid_mass, grid_mom from the threads' (m, mv_x, mv_y, mv_z) rows, summed in thread order:
-    the sums solver/fused.py `_reduce_mass_momentum` forms from a grid and its copies."""
-    threads = lanes.shape[0]
+    """grid_mass, grid_mom from the threads' (m, mv_x, mv_y, mv_z) rows (2D: (m, mv_x, mv_y, 0)),
+    summed in thread order: the sums solver/fused.py `_reduce_mass_momentum` forms from a grid and
+    its copies."""
+    threads, dim = lanes.shape[0], grid_mom.shape[1]
     for i in prange(grid_mass.shape[0]):
         m, px, py, pz = lanes[0, i, 0], lanes[0, i, 1], lanes[0, i, 2], lanes[0, i, 3]
         for t in range(1, threads):
@@ -141,5 +142,7 @@ def unpack_mass_momentum(grid_mass, grid_mom, lanes):
             px += lanes[t, i, 1]
             py += lanes[t, i, 2]
             pz += lanes[t, i, 3]
-        grid_mass[i], grid_mom[i, 0], grid_mom[i, 1], grid_mom[i, 2] = m, px, py, pz
+        grid_mass[i], grid_mom[i, 0], grid_mom[i, 1] = m, px, py
+        if dim == 3:
+            grid_mom[i, 2] = pz
 

@@ -79,9 +79,11 @@ class FusedPhases(Phases):
         self._p2g_mls_variants = {(inline, shared): (fused.constant(sim.loads.any), fused.constant(inline), vector_log,
                                                      fused.constant(shared))
                                   for inline in (False, True) for shared in (False, True)}
-        # MLS in 3D as `p2g_lanes` and `g2p_lanes`, a node's values in four lanes (the modules that have them)
-        self._has_lanes = (hasattr(self._kernels, "p2g_lanes") and apic and sim.affine.mls and sim.flip_ratio == 0.0
-                           and self._support.ndim - 1 == 3)
+        # MLS in 3D as `p2g_lanes` and `g2p_lanes`, in 2D `p2g_mls` as `p2g_mls_lanes`: a node's values
+        # in four lanes (the modules that have them)
+        lanes = hasattr(self._kernels, "p2g_lanes") or hasattr(self._kernels, "p2g_mls_lanes")
+        self._has_lanes = lanes and apic and sim.affine.mls and sim.flip_ratio == 0.0 and self._support.ndim - 1 == 3
+        self._has_g2p_lanes = self._has_lanes and hasattr(self._kernels, "g2p_lanes")
         self._node_lanes = self._velocity_lanes = np.zeros((0, 0, 4))
         # MUSL's KINEMATICS pass as `g2p_kinematics` (the same modules; not MLS, whose L_p is B_p D_p^-1)
         self._has_g2p_kinematics = (hasattr(self._kernels, "g2p_kinematics") and sim.scene.method.scheme == "musl"
@@ -156,9 +158,11 @@ class FusedPhases(Phases):
         L = self._affine_matrix if p.pending("L") else p.stored("L")
         if fold and self._vectorises_mls_p2g(L, acc):
             variant = self._p2g_mls_variants[inline, acc.shape[0] == 1]   # (one row: a shared acceleration)
-            self._kernels.p2g_mls(variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"),
-                                  *_flat(p.F, L), p.volume0, self._stress_parameters, *_flat(acc), *self._frame,
-                                  self._d_inv, g.mass, g.momentum, c.mass, c.momentum, bad, self.dt)
+            kernel, targets = ((self._kernels.p2g_mls_lanes, (self._lanes()[0],)) if self._uses_lanes() else
+                               (self._kernels.p2g_mls, (c.mass, c.momentum)))
+            kernel(variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"), *_flat(p.F, L),
+                   p.volume0, self._stress_parameters, *_flat(acc), *self._frame, self._d_inv, g.mass, g.momentum,
+                   *targets, bad, self.dt)
         elif fold and self._uses_lanes():
             self._kernels.p2g_lanes(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
                                     p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
@@ -174,10 +178,10 @@ class FusedPhases(Phases):
 
     def _uses_lanes(self) -> bool:
         """Whether MLS in 3D runs as `p2g_lanes` (its folded P2G) and `g2p_lanes` (its USL pass, C_p as
-        L_p, no stress update), a node's values in four lanes of one vector (solver/lanes.py,
-        solver/fused_template.py `_p2g_lanes`; the same bits as `p2g` and `g2p`): where the module
-        has them (3D, no conduction or contact) and the scene's transfer is MLS with quadratic
-        B-splines and no FLIP blend (`g2p_lanes` has none)."""
+        L_p, no stress update), and in 2D its folded P2G as `p2g_mls_lanes`, a node's values in four
+        lanes of one vector (solver/lanes.py, solver/fused_template.py `_p2g_lanes`; the same bits as
+        `p2g`, `p2g_mls` and `g2p`): where the module has them (no conduction or contact) and the
+        scene's transfer is MLS with quadratic B-splines and no FLIP blend (`g2p_lanes` has none)."""
         return self._has_lanes
 
     def _lanes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -235,7 +239,7 @@ class FusedPhases(Phases):
         if l_is_c and not updates and self._splits_mls_g2p():
             self._kernels.g2p_mls(*_flat(p.x, p.v, self._affine_matrix, p.F, g.v_new), p.volume, p.volume0,
                                   *self._frame, self._d_inv, dt, sim.copies.momentum.shape[0] + 1, bad)
-        elif l_is_c and not updates and self._uses_lanes():
+        elif l_is_c and not updates and self._uses_lanes() and self._has_g2p_lanes:
             self._kernels.g2p_lanes(p.x, p.v, self._affine_matrix, p.F, p.volume, p.volume0, self._frame, g.v_new,
                                     self._lanes()[1], dt, self._d_inv, sim.threads, bad)
         elif mode == fused.KINEMATICS and not updates and self._splits_kinematics():

@@ -21,6 +21,7 @@ from numba import njit
 
 from solver import fused, fused_template, generated, near_one_log, shape
 from solver.scene import load_scene
+from solver.step.fused import FusedPhases
 from solver.stepper import ExplicitMPM, Instability
 
 TOLERANCE = 1e-12
@@ -239,7 +240,8 @@ def test_the_kernels_fuse_multiply_and_add_where_the_environment_asks_for_it(mon
     monkeypatch.delenv(fused_template.FMA, raising=False)   # the default
     assert fused_template.source(3).count(decorator) == 4   # p2g, g2p, p2g_lanes and g2p_lanes
     monkeypatch.setenv(fused_template.FMA, "1")
-    assert fused_template.source(2).count(decorator) == 5   # p2g, g2p, p2g_mls, g2p_mls and g2p_kinematics
+    # p2g, g2p, p2g_mls, p2g_mls_lanes, g2p_mls and g2p_kinematics
+    assert fused_template.source(2).count(decorator) == 6
     monkeypatch.setenv(fused_template.FMA, "yes")
     with pytest.raises(ValueError, match="MPM_FMA='yes': must be 0"):
         fused_template.source(2)
@@ -692,6 +694,7 @@ def test_the_vectorised_mls_p2g_gives_the_scalar_kernel_bit_for_bit(material, th
     contraction and without. The neo-Hookean bodies are squeezed past log_near_one's interval, so
     the particles whose log J comes from math.log after the vectorised pass are in it too."""
     monkeypatch.setenv(fused_template.FMA, contract)
+    without_lanes(monkeypatch)
     scene = copy.deepcopy(SCENE_2D)
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
@@ -707,8 +710,9 @@ def test_the_vectorised_mls_p2g_gives_the_scalar_kernel_bit_for_bit(material, th
         assert np.array_equal(getattr(vectorised.particles, name), getattr(scalar.particles, name)), name
 
 
-def test_the_vectorised_mls_p2g_reads_an_assigned_stress_as_the_scalar_kernel_does():
+def test_the_vectorised_mls_p2g_reads_an_assigned_stress_as_the_scalar_kernel_does(monkeypatch):
     """An assigned stress is the state (Particles.derived): both kernels read it instead of forming it."""
+    without_lanes(monkeypatch)
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"]}
     scene["materials"]["m"] = NEO_HOOKEAN
     sims = []
@@ -735,7 +739,8 @@ def test_the_vectorised_mls_p2g_reads_an_assigned_stress_as_the_scalar_kernel_do
     ({"method": {**METHODS["usl-quadratic-mls"], "transfer": "apic"}}, False),
     ({"damping": {"type": "viscous", "coefficient": 5.0}}, False),     # damping reads f_I: not folded
 ])
-def test_the_vectorised_mls_p2g_runs_for_mls_with_the_force_folded_in_2d(change, runs):
+def test_the_vectorised_mls_p2g_runs_for_mls_with_the_force_folded_in_2d(change, runs, monkeypatch):
+    without_lanes(monkeypatch)
     base = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"]}
     base["materials"]["m"] = NEO_HOOKEAN
     if change.get("dimension") == 3:
@@ -749,13 +754,20 @@ def test_the_vectorised_mls_p2g_runs_for_mls_with_the_force_folded_in_2d(change,
 
 
 @pytest.mark.parametrize("threads", [1, 2])
-def test_the_vectorised_mls_p2g_names_the_first_particle_outside_the_grid_as_the_scalar_kernel(threads):
+def test_the_vectorised_mls_p2g_names_the_first_particle_outside_the_grid_as_the_scalar_kernel(threads, monkeypatch):
     """The vectorised pass counts the particles outside the grid, and the chunk that has one looks
     for the first: the step fails naming the particle `p2g` names."""
+    without_lanes(monkeypatch)
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
     scene["materials"]["m"] = NEO_HOOKEAN
     assert_the_same_particle_named_outside_the_grid(scene, "_vectorises_mls_p2g", "p2g_mls", lambda n: (
         (n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])))
+
+
+def without_lanes(monkeypatch) -> None:
+    """2D's folded MLS P2G as `p2g_mls`, not `p2g_mls_lanes` (the tests of p2g_mls compare it with
+    `p2g`; those of the lanes compare the lanes with it)."""
+    monkeypatch.setattr(FusedPhases, "_uses_lanes", lambda self: False)
 
 
 def assert_the_same_particle_named_outside_the_grid(scene: dict, switch: str, kernel: str, moved) -> None:
@@ -872,6 +884,8 @@ def test_a_conducting_3d_scene_has_no_lanes_kernels():
     assert "p2g_lanes" not in fused_template.source(3, thermal=True)
     assert "p2g_lanes" not in fused_template.source(3, contact=True)
     assert "p2g_lanes" in fused_template.source(3)
+    assert "p2g_mls_lanes" not in fused_template.source(2, thermal=True)
+    assert "p2g_mls_lanes" in fused_template.source(2)
 
 
 @pytest.mark.parametrize("threads", [1, 2])
@@ -884,3 +898,45 @@ def test_the_lanes_kernels_name_the_first_failing_particle_as_the_scalar_kernels
     assert_the_same_inverted_particle_named(scene, "_uses_lanes")
     assert_the_same_particle_named_outside_the_grid(scene, "_uses_lanes", "p2g_lanes", lambda n: (
         (n - 3, [2.0, 0.2, 0.2]), (n - 1, [float("nan"), 0.2, 0.2]), (n // 3, [0.5, -1.0, 0.2])))
+
+
+# -- MLS in 2D, P2G's scatter in four lanes --------------------------------------------------
+
+@pytest.mark.parametrize("material,threads,contract", [
+    (NEO_HOOKEAN, 1, "1"), (NEO_HOOKEAN, 2, "0"), (FLUID, 2, "1"), (LINEAR_FLUID, 1, "0")])
+def test_the_2d_lanes_scatter_gives_the_vectorised_mls_p2g_bit_for_bit(material, threads, contract, monkeypatch):
+    """`p2g_mls_lanes` adds a node's (m, mv_x, mv_y, 0) as lanes of one vector, each lane doing
+    `p2g_mls`'s operations on its component, and sums the threads' rows in `_reduce_mass_momentum`'s
+    order: after STEPS steps of the collision under gravity the state and the grid are the same
+    bits, with FMA contraction and without."""
+    monkeypatch.setenv(fused_template.FMA, contract)
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
+    lanes, plain = stepped_with_and_without(scene, "_uses_lanes")
+    scattered = _counted(plain, "p2g_mls")
+    assert_one_more_step_the_same_bits(lanes, plain, "p2g_mls_lanes")
+    assert len(scattered) == 1
+    assert np.array_equal(lanes.grid.mass, plain.grid.mass)
+    assert np.array_equal(lanes.grid.momentum, plain.grid.momentum)
+
+
+@pytest.mark.parametrize("change,runs", [
+    ({}, True),
+    ({"method": METHODS["musl-quadratic-mls"]}, True),                 # P2G is the same in MUSL
+    ({"method": {**METHODS["usl-quadratic-mls"], "transfer": "apic"}}, False),
+    ({"damping": {"type": "viscous", "coefficient": 5.0}}, False),    # damping reads f_I: not folded
+])
+def test_the_2d_lanes_scatter_runs_where_the_vectorised_mls_p2g_does(change, runs):
+    sim = ExplicitMPM(load_scene({**neo_hookean_mls(SCENE_2D), **change}))
+    assert not hasattr(sim.phases._kernels, "g2p_lanes")   # 2D's G2P is `g2p_mls`
+    calls = _counted(sim, "p2g_mls_lanes")
+    sim.advance(2e-4)
+    assert len(calls) == int(runs)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_2d_lanes_scatter_names_the_first_particle_outside_the_grid_as_p2g_mls(threads):
+    scene = {**neo_hookean_mls(SCENE_2D), "parallel": {"threads": threads}}
+    assert_the_same_particle_named_outside_the_grid(scene, "_uses_lanes", "p2g_mls_lanes", lambda n: (
+        (n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])))

@@ -48,12 +48,14 @@ def test_the_row_intrinsics_refuse_an_array_that_is_not_c_contiguous():
         _add_rows_exact(np.zeros((7, 8))[:, ::2], np.zeros(1, dtype=np.int64), np.ones(1), np.ones((1, 4)))
 
 
-def test_the_threads_rows_are_summed_into_mass_and_momentum_in_thread_order():
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_the_threads_rows_are_summed_into_mass_and_momentum_in_thread_order(dimension):
+    """3D's rows are (m, mv_x, mv_y, mv_z), 2D's (m, mv_x, mv_y, 0): the fourth lane is not read in 2D."""
     rows = RNG.normal(size=(3, 50, 4))
-    mass, momentum = np.empty(50), np.empty((50, 3))
+    mass, momentum = np.empty(50), np.empty((50, dimension))
     lanes.unpack_mass_momentum(mass, momentum, rows)
     expected = (rows[0] + rows[1]) + rows[2]
-    assert np.array_equal(mass, expected[:, 0]) and np.array_equal(momentum, expected[:, 1:])
+    assert np.array_equal(mass, expected[:, 0]) and np.array_equal(momentum, expected[:, 1:1 + dimension])
 
 
 def test_the_velocities_are_packed_with_a_zero_fourth_lane():
