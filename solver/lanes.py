@@ -1,5 +1,6 @@
 """Four float64 lanes in one value, for the 3D MLS kernels (solver/fused_template.py `_p2g_lanes`,
-`_g2p_lanes`): a node's (m, mv_x, mv_y, mv_z) or (v_x, v_y, v_z, 0) as one LLVM <4 x double>.
+`_g2p_lanes`) and 2D's MLS scatter (`p2g_mls_lanes`): a node's (m, mv_x, mv_y, mv_z), (m, mv_x,
+mv_y, 0) or (v_x, v_y, v_z, 0) as one LLVM <4 x double>.
 
 A 3D P2G adds four values into every one of a particle's 27 nodes, and a 3D G2P gathers three
 from each. Written with scalars, that is 4 loads, 4 adds and 4 stores a node (3 loads and 6
