@@ -83,6 +83,7 @@ class FusedPhases(Phases):
         # in four lanes (the modules that have them)
         lanes = hasattr(self._kernels, "p2g_lanes") or hasattr(self._kernels, "p2g_mls_lanes")
         self._has_lanes = lanes and apic and sim.affine.mls and sim.flip_ratio == 0.0 and self._support.ndim - 1 == 3
+        self._has_p2g_lanes = self._has_lanes and hasattr(self._kernels, "p2g_lanes")   # (3D's: not in 2D)
         self._has_g2p_lanes = self._has_lanes and hasattr(self._kernels, "g2p_lanes")
         self._node_lanes = self._velocity_lanes = np.zeros((0, 0, 4))
         # MUSL's KINEMATICS pass as `g2p_kinematics` (the same modules; not MLS, whose L_p is B_p D_p^-1)
@@ -163,7 +164,7 @@ class FusedPhases(Phases):
             kernel(variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"), *_flat(p.F, L),
                    p.volume0, self._stress_parameters, *_flat(acc), *self._frame, self._d_inv, g.mass, g.momentum,
                    *targets, bad, self.dt)
-        elif fold and self._uses_lanes():
+        elif fold and self._uses_lanes() and self._has_p2g_lanes:
             self._kernels.p2g_lanes(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
                                     p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
                                     self._d_inv, g.mass, g.momentum, self._lanes()[0], bad, self.dt)

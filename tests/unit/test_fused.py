@@ -935,6 +935,17 @@ def test_the_2d_lanes_scatter_runs_where_the_vectorised_mls_p2g_does(change, run
     assert len(calls) == int(runs)
 
 
+def test_a_2d_scene_whose_arrays_p2g_mls_cannot_take_runs_p2g_with_the_lanes_on():
+    """Where `p2g_mls` cannot run (an array it takes a flat view of is not C-contiguous:
+    `_vectorises_mls_p2g`), 2D's folded P2G is `p2g`: a 2D module has no `p2g_lanes`."""
+    sim = ExplicitMPM(load_scene(neo_hookean_mls(SCENE_2D)))
+    sim.phases._vectorises_mls_p2g = lambda *arrays: False
+    assert sim.phases._uses_lanes() and not hasattr(sim.phases._kernels, "p2g_lanes")
+    calls = _counted(sim, "p2g")
+    sim.advance(2e-4)
+    assert len(calls) == 1
+
+
 @pytest.mark.parametrize("threads", [1, 2])
 def test_the_2d_lanes_scatter_names_the_first_particle_outside_the_grid_as_p2g_mls(threads):
     scene = {**neo_hookean_mls(SCENE_2D), "parallel": {"threads": threads}}
