@@ -385,7 +385,7 @@ def _p2g_particle(dim: int, thermal: bool, contact: bool, stress: tuple | None, 
            "mct = mcap * T[p]        # kernel skips it: the same sums; a test per node cost 12 % of P2G)",
            f"{_each('q{c}', dim)} = {_each('heat_flux[p, {a}]', dim)}"] if thermal else []),
         *_field_shift(contact),
-        *(_p2g_lanes_stencil(dim) if lanes else [
+        *(_lanes_stencil(dim) if lanes else [
             "if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum",
             "    wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)",
             *_stencil(dim, _p2g_node(dim, thermal, contact), gradients=True, contact=contact,
@@ -538,25 +538,19 @@ def _logged(stress: tuple | None) -> list[str]:
 
 def _p2g_mls_scatter(dim: int, lanes: bool) -> list[str]:
     """The nodes of particle c + k from the buffers, as `_p2g_node` adds them with fold and mls;
-    with `lanes` a node's (m, mv_x, mv_y, 0) as one float64x4 into the thread's rows `gl`, as
-    `_p2g_lanes_stencil` adds 3D's (each lane does the scalar operations on its component)."""
+    with `lanes` a node's (m, mv_x, mv_y, 0) as one float64x4 into the thread's rows `gl`
+    (`_lanes_stencil`)."""
     fields = _p2g_mls_fields(dim)
     weights = [f"w{c} = " + ", ".join(f"buf[{fields.index(f'w{c}{n}')}, k]" for n in range(3)) for c in AXES[:dim]]
-    node = [f"w = wx[i] * {_outer(dim)}", "dx = (i - fx) * h0"]
-    row = _momentum_row(dim)
+    reads = [*[f"i{c} = first[{a}, k]" for a, c in enumerate(AXES[:dim])],
+             *[f"{name} = buf[{n}, k]" for n, name in enumerate(fields) if not name.startswith("w")], *weights]
     if lanes:
-        pad = ", 0.0" * (3 - dim)
-        node += ["add_to_row(gl, node, w, axpy(dx, column, base))"]
-        row += [f"base = lanes_of(m, {_each('r{c}', dim)}{pad})"]
-    else:
-        node += [*[f"p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
-                 _scatter("gm", "node", "+=", "w * m"),
-                 *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)]]
-    column = [f"column = lanes_of(0.0, {_each('mc{a}0', dim)}{', 0.0' * (3 - dim)})"] if lanes else []
-    return [*[f"i{c} = first[{a}, k]" for a, c in enumerate(AXES[:dim])],
-            *[f"{name} = buf[{n}, k]" for n, name in enumerate(fields) if not name.startswith("w")],
-            *weights, *column,
-            *_stencil(dim, node, gradients=False, contact=False, row_start=row)]
+        return reads + _lanes_stencil(dim)
+    node = [f"w = wx[i] * {_outer(dim)}", "dx = (i - fx) * h0",
+            *[f"p{AXES[a]} = r{AXES[a]} + mc{a}0 * dx" for a in range(dim)],
+            _scatter("gm", "node", "+=", "w * m"),
+            *[_scatter("gp", f"node, {a}", "+=", f"w * p{AXES[a]}") for a in range(dim)]]
+    return reads + _stencil(dim, node, gradients=False, contact=False, row_start=_momentum_row(dim))
 
 
 def _p2g_mls_chunk(dim: int, stress: tuple | None, lanes: bool) -> list[str]:
@@ -1023,15 +1017,16 @@ def _g2p_kinematics(dim: int, contract: bool) -> list[str]:
 
 # -- MLS in 3D, a node's values in four lanes -------------------------------------------
 
-def _p2g_lanes_stencil(dim: int) -> list[str]:
-    """`_p2g_particle`'s stencil for MLS's folded P2G with a node's (m, mv_x, mv_y, mv_z) added
-    as one float64x4 (solver/lanes.py) into the thread's (n, 4) rows `gl`: the node's m and
+def _lanes_stencil(dim: int) -> list[str]:
+    """The stencil of MLS's folded P2G with a node's (m, mv_x, mv_y, mv_z or 0) added as one
+    float64x4 (solver/lanes.py) into the thread's (n, 4) rows `gl`: the node's m and
     r{c} + mc{c}0 dx (`_p2g_node`) are lanes base + dx column, the mass lane's column entry 0
     (m + 0 dx is m), so that every lane does `p2g`'s operations on its component."""
-    return ["column = lanes_of(0.0, mc00, mc10, mc20)",
+    pad = ", 0.0" * (3 - dim)
+    return [f"column = lanes_of(0.0, {_each('mc{a}0', dim)}{pad})",
             *_stencil(dim, [f"w = wx[i] * {_outer(dim)}", "dx = (i - fx) * h0",
                             "add_to_row(gl, node, w, axpy(dx, column, base))"], gradients=False, contact=False,
-                      row_start=[*_momentum_row(dim), "base = lanes_of(m, rx, ry, rz)"])]
+                      row_start=[*_momentum_row(dim), f"base = lanes_of(m, {_each('r{c}', dim)}{pad})"])]
 
 
 def _p2g_lanes(stress: tuple | None, contract: bool) -> list[str]:
