@@ -842,8 +842,13 @@ def test_the_vectorised_kinematics_pass_names_the_first_inverted_particle_as_the
 
 # -- MLS in 3D, a node's values in four lanes ------------------------------------------------
 
+# The lanes change the scatter and the gather only: a material's stress lines are the same text in
+# `p2g_lanes` and `p2g` (held to the stress pass by the stress-formed tests above), so the cases cover
+# contraction on and off, one and two threads and the gather on and off, not every material. The
+# linear fluid with contraction is the module the failing-particle test below compiles too (a 3D
+# module and its kernels take about a minute and a half to compile on a 2-core Zen 3).
 @pytest.mark.parametrize("material,threads,contract,gathers", [
-    (NEO_HOOKEAN, 1, "1", True), (NEO_HOOKEAN, 2, "0", True), (FLUID, 2, "1", True), (LINEAR_FLUID, 1, "0", True),
+    (NEO_HOOKEAN, 1, "0", True), (LINEAR_FLUID, 2, "1", True),
     (None, 2, "1", False)])   # linear elasticity: its stress read in P2G, updated in G2P (`g2p` keeps it)
 def test_the_lanes_kernels_give_the_scalar_kernels_bit_for_bit(material, threads, contract, gathers, monkeypatch):
     """`p2g_lanes` adds a node's (m, mv) as lanes of one vector, each lane doing `p2g`'s operations on
