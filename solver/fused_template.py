@@ -1015,7 +1015,7 @@ def _g2p_kinematics(dim: int, contract: bool) -> list[str]:
             "                    break"]
 
 
-# -- MLS in 3D, a node's values in four lanes -------------------------------------------
+# -- MLS with a node's values in four lanes: 3D's P2G and G2P (2D's P2G scatter takes the stencil) --
 
 def _lanes_stencil(dim: int) -> list[str]:
     """The stencil of MLS's folded P2G with a node's (m, mv_x, mv_y, mv_z or 0) added as one
