@@ -80,6 +80,20 @@ def ensure_test_tools() -> None:
                    stdout=subprocess.DEVNULL)
 
 
+def _workers(extra: list[str]) -> list[str]:
+    """pytest-xdist workers, one per core up to four: most of a cold run is numba compiling,
+    one core per kernel (tests/conftest.py says how the tests are shared out). Serial when
+    the command line chooses (`-n 0`, `-p no:xdist`) or MPM_TEST_WORKERS=0."""
+    if any(arg == "-n" or arg.startswith(("-n", "--numprocesses", "--dist")) for arg in extra) \
+            or "no:xdist" in extra:
+        return []
+    text = os.environ.get("MPM_TEST_WORKERS", str(min(os.cpu_count() or 1, 4)))
+    if not text.isdigit():
+        sys.exit(f"MPM_TEST_WORKERS must be a whole number of pytest workers (0 or 1: serial), not {text!r}")
+    count = int(text)
+    return ["-n", str(count)] if count > 1 else []
+
+
 def run(argv: list[str]) -> int:
     return subprocess.call(argv, cwd=ROOT)
 
@@ -92,7 +106,7 @@ def main() -> int:
         return run([str(BIN / "mpm"), "serve", *extra])
     if command == "test":
         ensure_test_tools()
-        code = run([str(PY), "-m", "pytest", *(extra or ["tests"])])
+        code = run([str(PY), "-m", "pytest", *_workers(extra), *(extra or ["tests"])])
         if code == 5:  # pytest: no tests collected, which is a failure here
             print("no tests were collected", file=sys.stderr)
             return 1

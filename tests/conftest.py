@@ -1,0 +1,37 @@
+"""How the suite shares out over pytest-xdist workers (`scripts/dev.py test` starts them).
+
+A file's tests stay together on one worker: many files set up a service stack, a browser
+or a reference run once per module or session, and two workers would each pay for it.
+The files in SPREAD hold no such fixture and spend their time compiling a kernel
+specialised to each case, which is single-threaded; their tests go out one by one so
+every core compiles. Without xdist (plain `pytest`) nothing here changes a run.
+
+The grouping is a scheduler of its own rather than `--dist loadgroup` with marks:
+xdist 3.8's loadgroup groups nothing under pytest 9.2 (it rewrites a test id pytest no
+longer reads; pytest-dev/pytest-xdist#1386), and silently.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+SPREAD = {"unit/test_fused.py", "regression/test_regression.py"}
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    if config.getvalue("dist") != "load":  # a --dist the command line chose is left to xdist
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    tests = Path(__file__).resolve().parent.relative_to(config.rootpath).as_posix()
+    spread = {f"{tests}/{name}" for name in SPREAD}
+
+    class FileScheduling(LoadScopeScheduling):
+        """A work unit is a file, but for the SPREAD files, where it is a test."""
+
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            return nodeid if path in spread else path
+
+    return FileScheduling(config, log)
