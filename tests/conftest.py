@@ -4,7 +4,7 @@ A file's tests stay together on one worker: many files set up a service stack, a
 or a reference run once per module or session, and two workers would each pay for it.
 The files in SPREAD hold no such fixture and spend their time compiling a kernel
 specialised to each case, which is single-threaded; their tests go out one by one so
-every core compiles. Without xdist (plain `pytest`) nothing here changes a run.
+every core compiles. A run without workers (plain `pytest`, or no xdist) is not changed.
 
 The grouping is a scheduler of its own rather than `--dist loadgroup` with marks:
 xdist 3.8's loadgroup groups nothing under pytest 9.2 (it rewrites a test id pytest no
@@ -19,6 +19,7 @@ import pytest
 SPREAD = {"unit/test_fused.py", "regression/test_regression.py"}
 
 
+@pytest.hookimpl(optionalhook=True)  # an xdist hook: pytest without xdist would refuse the name
 def pytest_xdist_make_scheduler(config: pytest.Config, log):
     if config.getvalue("dist") != "load":  # a --dist the command line chose is left to xdist
         return None
