@@ -84,8 +84,7 @@ def _workers(extra: list[str]) -> list[str]:
     """pytest-xdist workers, one per core up to four: most of a cold run is numba compiling,
     one core per kernel (tests/conftest.py says how the tests are shared out). Serial when
     the command line chooses (`-n 0`, `-p no:xdist`) or MPM_TEST_WORKERS=0."""
-    if any(arg == "-n" or arg.startswith(("-n", "--numprocesses", "--dist")) for arg in extra) \
-            or "no:xdist" in extra:
+    if any(arg.startswith(("-n", "--numprocesses", "--dist")) for arg in extra) or "no:xdist" in extra:
         return []
     text = os.environ.get("MPM_TEST_WORKERS", str(min(os.cpu_count() or 1, 4)))
     if not text.isdigit():
