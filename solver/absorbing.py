@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 from solver.boundary import AXES, face_material, face_nodes
 

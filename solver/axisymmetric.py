@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.threads import add_node_copies, block_bounds, own
 

@@ -13,7 +13,7 @@ force, a known trait of its explicit form; the series counts it as it is.)
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 LOCAL, VISCOUS = 0, 1
 

@@ -26,7 +26,7 @@ Massless particles (rigid bodies) neither count nor change.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.threads import block_bounds
 

@@ -46,7 +46,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver import shape
 # which scenes the fused kernels run: decided without numba (the run-time estimates read it too)

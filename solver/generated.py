@@ -1,9 +1,8 @@
 """Modules the solver writes and imports: numba kernels specialised by code generation.
 
-numba caches a kernel in the folder of its source file, keyed by the file's path and
-modification time, so a generated module is written once per distinct text (its
-digest in the file name) to the user's cache, else the temporary folder, and its
-modification time then lasts as long as its text. It is registered in sys.modules
+A generated module is written once per distinct text (its digest in the file name) to
+the version's folder of the kernel cache (solver/kernel_cache.py), which also keeps its
+compiled kernels, else to the temporary folder. It is registered in sys.modules
 before it runs: numba's cache records a parallel kernel's module by name and imports
 it by that name when it loads the kernel (a module not in sys.modules is recorded as
 '<dynamic>', and such cache entries fail to load in a later process).
@@ -18,12 +17,13 @@ import tempfile
 from pathlib import Path
 from types import ModuleType
 
+from solver import kernel_cache
+
 
 def _folders(kind: str) -> list[Path]:
     """Where a generated module may go: the user's cache, else the system's temporary folder."""
-    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     temporary = Path(tempfile.gettempdir()) / f"mpm-solver-{os.getuid() if hasattr(os, 'getuid') else 'user'}"
-    return [cache / "mpm-solver" / kind, temporary / kind]
+    return [kernel_cache.modules_folder(kind), temporary / f"v-{kernel_cache.version_key()}" / kind]
 
 
 def _name(stem: str, text: str) -> str:

@@ -34,7 +34,7 @@ compare and a select at every access; unsigned ones skip it (docs/internals.md).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.threads import add_copies, add_node_copies, block_bounds, first_of, own
 

@@ -20,8 +20,10 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 from llvmlite import ir
-from numba import njit, prange, types
+from numba import types
 from numba.extending import intrinsic, models, register_model
+
+from solver.jit import njit, prange
 
 _DOUBLE = ir.DoubleType()
 _VECTOR = ir.VectorType(_DOUBLE, 4)

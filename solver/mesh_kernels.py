@@ -10,7 +10,7 @@ both count the point, nor both miss it, and the crossing count stays right.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 
 @njit(cache=True, inline="always")

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 from llvmlite import ir
-from numba import njit
+from solver.jit import njit
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 

@@ -15,7 +15,7 @@ log rows.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.expressions import compile_expression
 from solver.state import grid_geometry

@@ -10,7 +10,7 @@ Q_I = sum_p V_p q_p . grad phi_I (+ the boundary terms the hook adds).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver import kernels
 from solver.threads import add_node_copies, block_bounds, own

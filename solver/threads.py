@@ -36,7 +36,7 @@ if "OMP_WAIT_POLICY" not in os.environ:
 
 import numba  # noqa: E402  (after the policy: OpenMP reads it when numba first starts its threads)
 import numpy as np  # noqa: E402
-from numba import njit  # noqa: E402
+from solver.jit import njit  # noqa: E402
 
 from solver.thread_count import PARTICLES_PER_THREAD, available_cores, requested_threads  # noqa: E402,F401
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver import kernels
 from solver.threads import block_bounds

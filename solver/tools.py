@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.expressions import compile_expression
 from solver.geometry import from_spec

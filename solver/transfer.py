@@ -48,7 +48,7 @@ call them too.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.threads import add_node_copies, block_bounds, own
 

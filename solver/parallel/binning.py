@@ -3,7 +3,7 @@ per-slab lists (a counting sort, as MPM3DMP 4.1.2 bins particles into patches)."
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 
 @njit(cache=True)

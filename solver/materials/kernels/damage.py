@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 # Layout of the damage parameter array.
 D1, D2, D3, D4, D5, EVOLUTION = range(6)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 
 import numba
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.materials.drucker_prager import APEX, ELASTIC, SURFACE, TENSION
 from solver.materials.kernels import objective

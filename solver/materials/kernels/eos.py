@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 LINEAR, MIE_GRUNEISEN = 0, 1
 # Layout of the parameter array of one EOS.

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 
 @njit(cache=True, inline="always")

@@ -29,7 +29,7 @@ import math
 
 import numba
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.kernels import determinant
 from solver.materials.ideal_gas import body_state

@@ -16,7 +16,7 @@ q of the returned stress; solver/materials/plastic_work.py). The stored (elastic
 from __future__ import annotations
 
 import numba
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.materials.kernels import objective
 from solver.materials.kernels.linear_elastic import LinearElastic

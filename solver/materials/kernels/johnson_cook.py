@@ -43,7 +43,7 @@ import math
 
 import numba
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.materials.kernels import damage as damage_model
 from solver.materials.kernels import eos, objective

@@ -7,7 +7,7 @@ is sigma : C^-1 : sigma / 2, exact for this model without keeping the strain.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.materials.kernels.elastic import IsotropicElastic
 

@@ -26,7 +26,7 @@ import math
 
 import numba
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.materials.drucker_prager import APEX, EDGE, ELASTIC, SURFACE, TENSION
 from solver.materials.kernels import objective

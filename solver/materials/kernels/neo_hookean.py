@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.kernels import determinant
 from solver.materials.kernels.elastic import IsotropicElastic

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from solver.jit import njit
 
 
 NO_STRESS = (0.0,) * 9

@@ -17,7 +17,7 @@ configuration.
 """
 from __future__ import annotations
 
-from numba import njit
+from solver.jit import njit
 
 from solver.shape.kernels import tensor
 

@@ -30,7 +30,7 @@ reproduction for that particle.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.shape.kernels import gimp
 from solver.shape.kernels.gimp import LENGTH  # the seeded boxes: the domains at t = 0

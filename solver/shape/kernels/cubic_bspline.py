@@ -12,7 +12,7 @@ the grid needs at least 3 cells per axis (scene validation).
 """
 from __future__ import annotations
 
-from numba import njit
+from solver.jit import njit
 
 from solver.shape.kernels import tensor
 

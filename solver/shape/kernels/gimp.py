@@ -27,7 +27,7 @@ reported as outside.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.seeding import box_sides
 from solver.shape.kernels import tensor

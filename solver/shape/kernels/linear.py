@@ -7,7 +7,7 @@ is the cell-crossing noise of standard MPM (review 3.2).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.threads import block_bounds, first_of
 

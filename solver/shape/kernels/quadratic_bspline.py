@@ -8,7 +8,7 @@ outside the grid (keep one free cell between bodies and the grid ends).
 """
 from __future__ import annotations
 
-from numba import njit
+from solver.jit import njit
 
 from solver.shape.kernels import tensor
 

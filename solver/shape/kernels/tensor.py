@@ -20,7 +20,7 @@ from importlib import import_module
 from pathlib import Path
 
 import numpy as np
-from numba import njit
+from solver.jit import njit
 
 from solver import generated
 

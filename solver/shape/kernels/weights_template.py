@@ -9,7 +9,7 @@ This file runs as it is for quadratic B-splines (the import line below); `tensor
 replaces that line for the other shape functions.
 """
 import numpy as np
-from numba import njit, prange
+from solver.jit import njit, prange
 
 from solver.shape.kernels.tensor import scatter
 from solver.threads import block_bounds, first_of
