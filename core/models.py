@@ -42,6 +42,8 @@ class JobFields(BaseModel):
     end_time: float | None
     steps_per_second: float | None
     eta_seconds: float | None
+    # "queued" | "compiling" (a new variant's kernels) | "stepping" | "writing" (INTERFACES.md, third wave)
+    stage: str | None = None
     energies: dict[str, float | None]
     error: str | None
     processes: int
@@ -74,7 +76,7 @@ def new_job(job_id: str, owner: str | None, *, name: str | None, end_time: float
     record = JobRecord(
         id=job_id, name=name, status="queued", created_at=now_iso(), started_at=None,
         finished_at=None, progress=0.0, step=0, sim_time=0.0, end_time=end_time,
-        steps_per_second=None, eta_seconds=None, energies={"kinetic": 0.0, "strain": 0.0, "total": 0.0},
+        steps_per_second=None, eta_seconds=None, stage="queued", energies={"kinetic": 0.0, "strain": 0.0, "total": 0.0},
         error=None, processes=processes, summary=summary, owner=owner, cancel_requested=False, attempts=0,
         **{key: value for key, value in given.items() if value is not None})
     return record.model_dump(exclude_unset=True)  # not the worker's fields: they come when it runs

@@ -22,6 +22,7 @@ from core.models import ACTIVE, FINISHED, RECORD_FIELDS, SWEEP_FIELDS, now_iso
 PREFIX = "mpm:"
 ALL_INDEX = PREFIX + "jobs"
 WORKERS = PREFIX + "workers"
+WARMING = PREFIX + "workers:warming"   # the set of workers compiling their kernels at start
 WEBHOOKS = PREFIX + "webhooks"  # deliveries due (core/webhooks.py)
 # A worker beats every HEARTBEAT_INTERVAL seconds (worker/heartbeat.py); one not heard
 # from for HEARTBEAT_MAX_AGE is taken as gone (`/readyz` counts the others).
@@ -189,7 +190,7 @@ for _, id in ipairs(redis.call('ZRANGE', KEYS[1], 0, -1)) do
     redis.call('ZREM', KEYS[1], id)
     redis.call('ZADD', KEYS[2], score, id)
     redis.call('HSET', ARGV[1] .. 'job:' .. id, 'status', '"queued"', 'started_at', 'null',
-               'progress', '0.0', 'step', '0')
+               'progress', '0.0', 'step', '0', 'stage', '"queued"')
     redis.call('HINCRBY', ARGV[1] .. 'job:' .. id, 'lost', 1)
     table.insert(out, id)
   end
@@ -446,6 +447,16 @@ class JobStore:
 
     def worker_gone(self, worker: str) -> None:
         self.redis.zrem(WORKERS, worker)
+        self.redis.srem(WARMING, worker)
+
+    def set_warming(self, worker: str, warming: bool) -> None:
+        """A worker compiling its kernels before jobs need them (worker/warmup.py): it takes jobs meanwhile."""
+        (self.redis.sadd if warming else self.redis.srem)(WARMING, worker)
+
+    def warming_workers(self) -> list[str]:
+        """The live workers still warming up."""
+        live = set(self.live_workers())
+        return sorted(worker for worker in self.redis.smembers(WARMING) if worker in live)
 
     def live_workers(self, max_age: float = HEARTBEAT_MAX_AGE) -> list[str]:
         return self.redis.zrangebyscore(WORKERS, time.time() - max_age, "+inf")

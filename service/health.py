@@ -29,3 +29,14 @@ def readyz(svc: Services = Depends(services)) -> Any:
     if not workers:
         return error_response(503, "not_ready", "no worker is alive", {"redis": "ok", "workers": 0})
     return {"status": "ready", "redis": "ok", "workers": len(workers)}
+
+
+@router.get("/v1/health", responses=documented({503: "Redis unreachable"}))
+def health(svc: Services = Depends(services)) -> Any:
+    """The live workers, and those still compiling their kernels at start ("warming": they
+    take jobs meanwhile, and a job may wait for its kernels to compile)."""
+    try:
+        workers, warming = svc.store.live_workers(), svc.store.warming_workers()
+    except redis.RedisError as exc:
+        return error_response(503, "not_ready", "Redis is not reachable", {"redis": str(exc)})
+    return {"redis": "ok", "workers": sorted(workers), "warming": warming}

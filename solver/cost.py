@@ -17,17 +17,21 @@ The figures come from `mpm calibrate` (solver/calibrate.py), stored in the user'
 cache folder (`calibration_path()`); without that, the model shipped with the
 package (`SHIPPED`, measured on the development machine) is used. `source` says which.
 A kernel variant not yet in numba's cache compiles on its first run (seconds to a
-minute): the estimate assumes a warm cache, as every run after the first has.
+minute): `compile_seconds` adds the measured compile time of the scene's kind unless a
+run of the same variant (`variant`: the scene's structure, its numbers left out) has
+marked it compiled in this version's kernel cache (solver/kernel_cache.py).
 """
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import os
 from pathlib import Path
 
 from pydantic import BaseModel, Field
 
-from solver import fused_scope
+from solver import fused_scope, kernel_cache
 from solver.expressions import compile_expression
 from solver import shape as shape_functions
 from solver.scene import BODY_FORCE_VARIABLES
@@ -79,6 +83,9 @@ class CostModel(BaseModel):
     factors: dict[str, float] = Field(description="'<backend>/<transfer or scheme>', 'axisymmetric': "
                                                   "multiply the per-particle cost")
     thread_scaling: dict[str, ThreadScaling] = Field(description="'<dim>/<backend>'")
+    compile_seconds: dict[str, float] = Field(
+        default_factory=dict, description="'<dim>/<backend>': compiling a new variant's step on an empty cache; "
+                                          "'<dim>/<model>': what a material model adds")
     source: str = Field("", exclude=True, description="the file it was read from")
 
 
@@ -157,7 +164,8 @@ def _expression_seconds(model: CostModel, scene) -> float:
 
 def estimate_seconds(scene, particles_per_body: list[int], nodes: int, steps: int,
                      model: CostModel | None = None) -> float:
-    """Wall time of a run from start to exit, with numba's cache warm."""
+    """Wall time of a run from start to exit, with numba's cache warm (`compile_seconds` adds
+    the compilation of a new variant)."""
     model = model or load_model()
     dim = scene.dimension
     backend = backend_name(scene)
@@ -180,3 +188,63 @@ def estimate_seconds(scene, particles_per_body: list[int], nodes: int, steps: in
         f"{dim}/{backend}/{scene.method.shape_function}", 0.0)
     return startup + frames + steps * step
 
+
+
+# Compile time of a variant when the model has no figure for its kind (a 2D elastic step, measured).
+DEFAULT_COMPILE_SECONDS = 30.0
+# Parts of a scene that change no kernel: names, labels, output and timing.
+_NOT_COMPILED = {"name", "material", "units", "output", "time", "version"}
+
+
+def _structure(value):
+    """`value` with its numbers and names left out and its lists as sorted sets: what decides
+    which kernels a run compiles (the kernels take the numbers as arguments)."""
+    if isinstance(value, dict):
+        return {key: _structure(item) for key, item in sorted(value.items()) if key not in _NOT_COMPILED}
+    if isinstance(value, list):
+        return sorted({json.dumps(_structure(item), sort_keys=True) for item in value})
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return value
+    return "#"
+
+
+def variant(scene) -> str:
+    """A digest of what decides the kernels a run of `scene` compiles."""
+    data = scene.model_dump(mode="json")
+    data["materials"] = list(data["materials"].values())   # their names are the user's
+    data["parallel"] = {"processes": min(scene.parallel.processes, 2)}   # one or several: MPI's kernels
+    data["backend"] = backend_name(scene)
+    return hashlib.sha256(json.dumps(_structure(data), sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _compiled_marker(scene) -> Path:
+    return kernel_cache.version_folder() / "compiled" / f"{variant(scene)}.json"
+
+
+def is_compiled(scene) -> bool:
+    """Whether a run of this variant compiled its kernels into this version's cache."""
+    return _compiled_marker(scene).exists()
+
+
+def mark_compiled(scene, seconds: float, count: int) -> None:
+    """Record that this variant's kernels are in the cache (after a run's first step)."""
+    marker = _compiled_marker(scene)
+    try:
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        temporary = marker.with_name(f".{marker.name}.{os.getpid()}")
+        temporary.write_text(json.dumps({"compile_seconds": round(seconds, 3), "compiled": count}))
+        os.replace(temporary, marker)
+    except OSError:
+        pass   # a read-only cache: later estimates count the compilation again, nothing worse
+
+
+def compile_seconds(scene, model: CostModel | None = None) -> float:
+    """Wall time the run will spend compiling: 0 for a variant compiled before, else the
+    model's figure for the scene's kind plus what its materials' models add."""
+    if is_compiled(scene):
+        return 0.0
+    model = model or load_model()
+    table, dim = model.compile_seconds, scene.dimension
+    seconds = table.get(f"{dim}/{backend_name(scene)}", DEFAULT_COMPILE_SECONDS)
+    models = {material.model for material in scene.materials.values()}
+    return seconds + sum(table.get(f"{dim}/{name}", 0.0) for name in models)

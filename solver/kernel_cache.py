@@ -33,9 +33,8 @@ import shutil
 import sys
 import time
 from functools import cache
+from importlib import metadata
 from pathlib import Path
-
-from numba.core import event as numba_event
 
 PACKAGE = Path(__file__).resolve().parent
 PRUNE_DAYS = 30
@@ -52,21 +51,25 @@ def cache_root() -> Path:
 
 @cache
 def version_key() -> str:
-    """A digest of every solver source (path in the package and text) and of the compiler stack."""
-    import llvmlite
-    import numba
-    import numpy
+    """This process's version of the solver (`digest` of the package); fixed for the process."""
+    return digest(PACKAGE)
 
-    digest = hashlib.sha256()
-    for name in (numba.__version__, llvmlite.__version__, numpy.__version__, sys.version,
+
+def digest(package: Path) -> str:
+    """A digest of every source of `package` (path in it and text) and of the compiler stack
+    (read from the installed packages' metadata: the API process never imports numba)."""
+    hasher = hashlib.sha256()
+    for name in (*(metadata.version(stack) for stack in ("numba", "llvmlite", "numpy")), sys.version,
                  platform.machine(), sys.platform):
-        digest.update(name.encode() + b"\0")
-    for path in sorted(PACKAGE.rglob("*.py")):
-        digest.update(path.relative_to(PACKAGE).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()[:16]
+        hasher.update(name.encode() + b"\0")
+    for path in sorted(package.rglob("*.py")):
+        hasher.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return hasher.hexdigest()[:16]
 
 
+@cache
 def version_folder() -> Path:
+    """This version's folder; fixed for the process, like the kernels' places in it."""
     return cache_root() / f"v-{version_key()}"
 
 
@@ -171,32 +174,3 @@ def prune(root: Path, days: float = PRUNE_DAYS) -> list[Path]:
                 removed.append(folder)
     return removed
 
-
-class CompileMeter(numba_event.Listener):
-    """Counts numba's compilations (cache misses: a kernel loaded from the cache is not one)
-    and the wall time spent in them, outermost compilations only; `with CompileMeter() as m:`."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.count = 0
-        self.seconds = 0.0
-        self._depth = 0
-        self._started = 0.0
-
-    def on_start(self, event) -> None:
-        self.count += 1
-        if self._depth == 0:
-            self._started = time.perf_counter()
-        self._depth += 1
-
-    def on_end(self, event) -> None:
-        self._depth -= 1
-        if self._depth == 0:
-            self.seconds += time.perf_counter() - self._started
-
-    def __enter__(self) -> "CompileMeter":
-        numba_event.register("numba:compile", self)
-        return self
-
-    def __exit__(self, *exc) -> None:
-        numba_event.unregister("numba:compile", self)

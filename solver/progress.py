@@ -131,6 +131,7 @@ class ProgressBar:
         # the rate and the ETA are None until a recent rate is measured (RateMeter): left out until then
         parts += [f"{rate:.0f} steps/s"] if rate else []
         parts += [f"ETA {format_duration(eta)}"] if eta is not None else []
+        parts += ["compiling kernels"] if get("stage") == "compiling" else []
         text = "  ".join(parts)
         if not self.tty:
             return text

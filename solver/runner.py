@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Callable
 
 from solver import __version__
-from solver import checkpoint, energy, series
+from solver import checkpoint, cost, energy, series
+from solver.compile_meter import CompileMeter
 from solver.fields import frame_fields
 from solver.preview import finish_outputs
 from solver.progress import RateMeter
@@ -47,6 +48,7 @@ class ProgressInfo:
     eta_seconds: float | None
     dt: float
     energies: dict = field(default_factory=dict)
+    stage: str = "stepping"   # "compiling" (kernels before the first step) | "stepping" | "writing"
 
 
 @dataclass
@@ -60,6 +62,8 @@ class Result:
     particles: int
     result_path: str
     out_dir: str
+    compiled: int = 0              # kernels numba compiled in this run (0: all came from the cache)
+    compile_seconds: float = 0.0   # wall time spent compiling them
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -121,7 +125,16 @@ def run(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = wallclock.perf_counter()
+    with _Compiling(scene, started, progress) as compiling:
+        result = _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds)
+    cost.mark_compiled(scene, compiling.meter.seconds, compiling.meter.count)
+    result.compiled, result.compile_seconds = compiling.meter.count, round(compiling.meter.seconds, 3)
+    return result
+
+
+def _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds) -> Result:
     loop = _TimeLoop(scene, make_simulation(scene), started, progress, should_stop)
+    loop.compiling = compiling
     restart = checkpoint.resume(loop.sim, out_dir) if resume else None
     if restart is not None:
         loop.dt, loop.frames.next = restart.dt, restart.frame_next
@@ -133,13 +146,14 @@ def run(
         checkpoints = checkpoint.Checkpointer(out_dir, scene, checkpoint.Policy.of(scene, checkpoint_seconds),
                                               writer, restart)
         reason, message = loop.run(writer, checkpoints, signals)
+        loop.report(wallclock.perf_counter(), stage="writing")
         checkpoints.finish(loop.sim, reason)
         status = "complete" if reason == "finished" else "partial"
         writer.close(status)
     if domain.is_root:
         finish_outputs(out_dir, scene)
     wall = wallclock.perf_counter() - started
-    loop.report(wallclock.perf_counter())
+    loop.report(wallclock.perf_counter(), stage="writing")
     return Result(status=status, reason=reason, message=message, steps=loop.sim.step_count, time=loop.sim.time,
                   wall_seconds=wall, particles=int(domain.sum(loop.sim.particles.count)),
                   result_path=str(out_dir / "result.h5"), out_dir=str(out_dir))
@@ -163,6 +177,7 @@ class _TimeLoop:
         self.rates = RateMeter()
         self.last_energies = {}
         self.dt = scene.time.dt or sim.stable_time_step(scene.time.cfl)
+        self.compiling: _Compiling | None = None
 
     def run(self, writer, checkpoints, signals) -> tuple[str, str]:
         """(reason, message) of the end: finished, max_steps, cancelled or unstable."""
@@ -184,6 +199,9 @@ class _TimeLoop:
                 if self._stop_requested(signals):
                     return "cancelled", f"stopped on request at step {sim.step_count}"
                 self._advance()
+                if self.compiling is not None and self.compiling.active:
+                    self.compiling.done()
+                    self.report(wallclock.perf_counter())   # the first step: the rates' origin
         except Instability as err:
             return "unstable", str(err)
 
@@ -216,7 +234,8 @@ class _TimeLoop:
         asked = signals.requested   # a signal is honoured at the next step (a flag: no cost)
         if domain.root_says(now - self.last_report >= PROGRESS_INTERVAL_S):
             self.last_report = now
-            self.report(now)
+            if self.compiling is None or not self.compiling.active:   # else its thread reports
+                self.report(now)
             asked = asked or (self.should_stop is not None and self.should_stop())
         return domain.any(asked)
 
@@ -228,10 +247,12 @@ class _TimeLoop:
         self.dt = min(dt, to_frame) if to_frame > TIME_TOLERANCE * dt else dt
         sim.advance(self.dt)
 
-    def report(self, now: float) -> None:
+    def report(self, now: float, stage: str = "stepping") -> None:
         if self.progress is not None and self.sim.domain.is_root:
             self.rates.update(now, self.sim.step_count, self.sim.time)
-            self.progress(_progress(self.sim, self.end, self.dt, self.rates, self.last_energies))
+            info = _progress(self.sim, self.end, self.dt, self.rates, self.last_energies)
+            info.stage = stage
+            self.progress(info)
 
 
 def make_simulation(scene: Scene) -> ExplicitMPM:
@@ -255,3 +276,57 @@ def _progress(sim: ExplicitMPM, end: float, dt: float, rates: RateMeter, energie
     eta = 0.0 if fraction >= 1.0 else rates.eta_seconds(end - sim.time)
     return ProgressInfo(step=sim.step_count, time=sim.time, end_time=end, fraction=fraction,
                         steps_per_second=rates.steps_per_second, eta_seconds=eta, dt=dt, energies=dict(energies))
+
+
+class _Compiling:
+    """The run's first stage: numba loads or compiles the kernels until the first step is done.
+
+    Counts the compilations (Result.compiled); with a progress callback, a thread reports
+    stage "compiling" every REPORT_S with an ETA of the compilation left (the cost model's
+    figure, solver/cost.py) plus the run's estimate, since the main thread is in the compiler
+    and reports nothing. After the first step the variant is marked compiled, so that later
+    estimates leave the compilation out."""
+
+    REPORT_S = 1.0
+
+    def __init__(self, scene: Scene, started: float, progress):
+        self.scene, self.started, self.progress = scene, started, progress
+        self.meter = CompileMeter()
+        self.active = True
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._report, daemon=True) if progress is not None else None
+
+    def __enter__(self) -> "_Compiling":
+        self.meter.__enter__()
+        if self._thread is not None:
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.done()
+        self.meter.__exit__(*exc)
+
+    def done(self) -> None:
+        if not self.active:
+            return
+        self.active = False
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self.meter.count:
+            cost.mark_compiled(self.scene, self.meter.seconds, self.meter.count)
+
+    def _report(self) -> None:
+        from solver.summary import summarize   # counts the particles: here, beside the compiler
+        try:
+            summary = summarize(self.scene)
+            compiling, total = summary.estimated_compile_seconds, summary.estimated_run_seconds
+        except Exception:   # an estimate is a courtesy: never the run's failure
+            compiling = total = None
+        while True:
+            elapsed = wallclock.perf_counter() - self.started
+            eta = None if total is None else total - compiling + max(compiling - elapsed, 0.0)
+            self.progress(ProgressInfo(step=0, time=0.0, end_time=self.scene.time.end, fraction=0.0,
+                                       steps_per_second=None, eta_seconds=eta, dt=0.0, stage="compiling"))
+            if self._stop.wait(self.REPORT_S):
+                return

@@ -29,7 +29,10 @@ class Summary(BaseModel):
     estimated_steps: int = Field(description="end / dt; an estimate when dt is adaptive")
     memory_bytes: int = Field(description="estimate of the solver's particle and grid arrays")
     estimated_run_seconds: float = Field(description="wall time from start to exit, from this machine's measured "
-                                                     "cost model (solver/cost.py; mpm calibrate)")
+                                                     "cost model (solver/cost.py; mpm calibrate), compilation "
+                                                     "included")
+    estimated_compile_seconds: float = Field(0.0, description="of which compiling the kernels of a variant not "
+                                                              "in this machine's kernel cache (0 when it is)")
     warnings: list[dict[str, str]] = Field(default_factory=list,
                                            description="[{path, message}]: valid, but probably not what is meant")
 
@@ -41,6 +44,7 @@ def summarize(scene: Scene) -> Summary:
     nodes = math.prod(n + 1 for n in shape)
     dt = time_step(scene)
     steps = estimate_steps(scene)
+    compiling = cost.compile_seconds(scene)
     return Summary(
         particles=particles,
         particles_per_body=per_body,
@@ -49,7 +53,8 @@ def summarize(scene: Scene) -> Summary:
         dt=dt,
         estimated_steps=steps,
         memory_bytes=memory_bytes(scene, particles, nodes),
-        estimated_run_seconds=cost.estimate_seconds(scene, per_body, nodes, steps),
+        estimated_run_seconds=cost.estimate_seconds(scene, per_body, nodes, steps) + compiling,
+        estimated_compile_seconds=compiling,
         warnings=[{"path": path, "message": message} for path, message in scene_warnings(scene)],
     )
 

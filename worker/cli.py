@@ -6,6 +6,9 @@ import logging
 import os
 import socket
 import sys
+import threading
+
+import redis
 
 from celery.signals import worker_ready, worker_shutdown
 
@@ -38,6 +41,19 @@ def register_worker(subparsers) -> None:
     parser.set_defaults(func=worker_command)
 
 
+def _warm_up_behind(name: str) -> None:
+    """The warm-up in a thread: the worker is ready (heartbeat, jobs) while it compiles."""
+    from worker.tasks import get_store
+
+    def warming(flag: bool) -> None:
+        try:
+            get_store().set_warming(name, flag)
+        except redis.RedisError as exc:
+            log.warning("warm-up state not recorded: %s", exc, extra={"worker": name})
+
+    threading.Thread(target=warm_up, kwargs={"warming": warming}, name="mpm-warmup", daemon=True).start()
+
+
 def worker_command(args: argparse.Namespace) -> int:
     settings = get_settings()
     configure_logging(settings.log_level)
@@ -46,8 +62,6 @@ def worker_command(args: argparse.Namespace) -> int:
               "(`mpm serve` starts its own worker)", file=sys.stderr)
         return 2
     name = args.name or f"mpm-{os.getpid()}@{socket.gethostname()}"
-    if settings.warmup and not args.no_warmup:
-        warm_up()
     app = make_celery(settings, include=("worker.tasks",))
 
     from worker.tasks import get_store  # the task module registers the task with `app`
@@ -56,7 +70,15 @@ def worker_command(args: argparse.Namespace) -> int:
                           retain=lambda: remove_expired(get_store(), settings.jobs_dir, settings.retention_days),
                           retain_every=min(3600.0, settings.retention_days * 86400 / 10))
     sender = WebhookSender(get_store(), settings)
-    worker_ready.connect(lambda **_: (heartbeat.start(), sender.start()), weak=False)
+    warm = settings.warmup and not args.no_warmup
+
+    def on_ready(**_) -> None:
+        heartbeat.start()
+        sender.start()
+        if warm:
+            _warm_up_behind(name)
+
+    worker_ready.connect(on_ready, weak=False)
     worker_shutdown.connect(lambda **_: (heartbeat.stop(), sender.stop()), weak=False)
 
     worker = app.Worker(

@@ -41,7 +41,7 @@ log = logging.getLogger("mpm.worker")
 # Keys of the solver's progress line -> fields of the job record.
 PROGRESS_FIELDS = {"fraction": "progress", "step": "step", "time": "sim_time",
                    "end_time": "end_time", "steps_per_second": "steps_per_second",
-                   "eta_seconds": "eta_seconds", "energies": "energies", "dt": "dt"}
+                   "eta_seconds": "eta_seconds", "energies": "energies", "dt": "dt", "stage": "stage"}
 
 # Set when the worker begins a shutdown: running jobs stop and go back to the queue.
 _shutting_down = threading.Event()
@@ -94,7 +94,7 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         return
     before = _retry_redis(lambda: store.transition(
         job_id, ACTIVE, "running", started_at=now_iso(), worker=worker,
-        attempts=job.get("attempts", 0) + 1, lost=lost, steps_per_second=None, eta_seconds=None,
+        attempts=job.get("attempts", 0) + 1, lost=lost, steps_per_second=None, eta_seconds=None, stage="compiling",
         error=None))
     if before not in ACTIVE:
         log.info("job skipped: it is %s", before, extra={"job_id": job_id})

@@ -1,16 +1,23 @@
-"""Compile the solver's kernels before the first job, so that it starts at once.
+"""Compile the solver's kernels behind a ready worker, so that the first jobs find them compiled.
 
-The kernels are compiled with numba's on-disk cache; running a tiny scene in a
-child process (like a job) fills that cache for the common kernel variants.
+The kernels are kept in the versioned kernel cache (solver/kernel_cache.py); running a
+tiny scene in a child process (like a job) fills it for the common kernel variants. A
+variant already marked compiled in this version's cache (solver/cost.py) is skipped
+without starting a process, so a restarted worker warms up in well under a second. The
+worker takes jobs meanwhile (they compile what they need, and load what the warm-up
+saved); `GET /v1/health` lists it under "warming" until it is done.
 """
 from __future__ import annotations
 
 import json
 import logging
+import os
 import subprocess
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Callable
 
 from worker.runner import solver_command
 
@@ -37,23 +44,46 @@ WARMUP = ((1, "linear_elastic"), (2, "linear_elastic"), (2, "neo_hookean"),
           (3, "linear_elastic"), (3, "neo_hookean"))
 
 
-def warm_up(timeout: float = 600.0) -> None:
-    """Run each tiny scene once; a failure is logged, never fatal (jobs then compile)."""
-    with tempfile.TemporaryDirectory(prefix="mpm-warmup-") as tmp:
-        for dimension, model in WARMUP:
-            name = f"{dimension}d_{model}"
-            scene = Path(tmp) / f"{name}.json"
-            scene.write_text(json.dumps(_tiny_scene(dimension, model)))
-            started = time.monotonic()
-            extra = {"dimension": dimension, "model": model}
-            try:
-                done = subprocess.run(solver_command(scene, Path(tmp) / name, progress="none"),
-                                      capture_output=True, text=True, timeout=timeout)
-            except subprocess.TimeoutExpired:
-                log.warning("warm-up timed out", extra=extra)
-                continue
-            extra["seconds"] = round(time.monotonic() - started, 2)
-            if done.returncode == 0:
-                log.info("warm-up done", extra=extra)
-            else:
-                log.warning("warm-up failed", extra={**extra, "stderr": done.stderr[-2000:]})
+def pending(variants=WARMUP) -> list[tuple[int, str]]:
+    """The variants not yet compiled into this version's kernel cache."""
+    from solver import cost
+    from solver.scene import load_scene
+
+    return [(dim, model) for dim, model in variants if not cost.is_compiled(load_scene(_tiny_scene(dim, model)))]
+
+
+def _compile(dimension: int, model: str, folder: Path, timeout: float) -> None:
+    name = f"{dimension}d_{model}"
+    scene = folder / f"{name}.json"
+    scene.write_text(json.dumps(_tiny_scene(dimension, model)))
+    started = time.monotonic()
+    extra = {"dimension": dimension, "model": model}
+    try:
+        done = subprocess.run(solver_command(scene, folder / name, progress="none"),
+                              capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        log.warning("warm-up timed out", extra=extra)
+        return
+    extra["seconds"] = round(time.monotonic() - started, 2)
+    if done.returncode == 0:
+        log.info("warm-up done", extra=extra)
+    else:
+        log.warning("warm-up failed", extra={**extra, "stderr": done.stderr[-2000:]})
+
+
+def warm_up(timeout: float = 600.0, workers: int | None = None,
+            warming: Callable[[bool], None] = lambda _: None) -> None:
+    """Compile the pending variants, one process per core; a failure is logged, never fatal
+    (jobs then compile). `warming(True)` before and `warming(False)` after, for the health page."""
+    todo = pending()
+    if not todo:
+        log.info("warm-up: every variant is in the kernel cache")
+        return
+    warming(True)
+    try:
+        with tempfile.TemporaryDirectory(prefix="mpm-warmup-") as tmp, \
+                ThreadPoolExecutor(workers or min(len(todo), os.cpu_count() or 1)) as pool:
+            for future in [pool.submit(_compile, dim, model, Path(tmp), timeout) for dim, model in todo]:
+                future.result()
+    finally:
+        warming(False)

@@ -778,6 +778,7 @@
       const rows = [
         ["Step", fmtInteger(record.step)],
         ["Sim time", `${fmtNumber(record.sim_time)}${record.end_time ? ` / ${fmtNumber(record.end_time)}` : ""}`],
+        ["Stage", running || record.status === "queued" ? record.stage || "–" : "–"],
         ["Steps/s", running ? fmtInteger(record.steps_per_second) : "–"],
         ["ETA", running ? fmtDuration(record.eta_seconds) : "–"],
         ["Particles", fmtInteger(summary.particles)],

@@ -132,10 +132,12 @@ def test_run_json_progress_end_to_end(tmp_path):
     lines = [json.loads(line) for line in done.stdout.splitlines()]
     assert {line["event"] for line in lines[:-1]} == {"progress"}
     assert set(lines[0]) == {"event", "step", "time", "end_time", "fraction", "steps_per_second",
-                             "eta_seconds", "dt", "energies"}
+                             "eta_seconds", "dt", "energies", "stage"}
+    stages = [line["stage"] for line in lines[:-1]]   # in order: each stage once, none skipped
+    assert sorted(set(stages), key=stages.index) == ["compiling", "stepping", "writing"]
     assert lines[-2]["fraction"] == pytest.approx(1.0)
     final = lines[-1]
-    assert final["event"] == "done"
+    assert final["event"] == "done" and final["compiled"] >= 0 and final["compile_seconds"] >= 0
     assert (final["status"], final["reason"], final["steps"]) == ("complete", "finished", 32)
     assert final["result_path"] == str(out / "result.h5")
     for name in ("result.h5", "result.xdmf", "preview.png"):

@@ -52,6 +52,7 @@ class JobRecord(_Open):
     end_time: float | None = None
     steps_per_second: float | None = None
     eta_seconds: float | None = None
+    stage: str | None = None   # "queued" | "compiling" | "stepping" | "writing"
     energies: Energies = Field(default_factory=Energies)
     error: str | None = None
     processes: int | None = None

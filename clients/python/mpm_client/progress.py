@@ -35,7 +35,7 @@ def format_progress(record: JobRecord, width: int = 24) -> str:
         parts.append(f"{record.steps_per_second:,.0f} steps/s")
     if record.status == "running":
         parts.append(f"ETA {format_duration(record.eta_seconds)}")
-    parts.append(record.status)
+    parts.append(f"running ({record.stage})" if record.status == "running" and record.stage else record.status)
     return "  ".join(parts)
 
 

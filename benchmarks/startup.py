@@ -1,0 +1,142 @@
+"""Time to first result: how long a run waits on numba before its first step, cold and warm.
+
+    python benchmarks/startup.py                         # the default examples, cold then warm
+    python benchmarks/startup.py --examples two_disks elastic_cube_3d --json startup.json
+    python benchmarks/startup.py --all                   # every example (long: each compiles from empty)
+
+For each example, in a kernel cache of its own that starts empty (MPM_CACHE_DIR, solver/
+kernel_cache.py), the example runs twice as `mpm run` does (`python -m solver run ...
+--progress json`): first cold, then warm. Each run gives the seconds from launch to its first
+step (its first "stepping" progress line), the kernels compiled and the seconds spent
+compiling (the run's `done` line), its wall time and the estimate it started with (the
+first progress line's ETA plus its time: `mpm validate`'s figure, compilation included
+while the variant is not in the cache), as wall / estimate. Then four of the examples start
+at once in one warm cache (every process should compile nothing), and `mpm serve` starts on
+a warm cache (seconds to `/readyz` 200). Figures are wall times on whatever else the machine
+is doing: run it on a quiet machine, and twice.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from solver.examples import list_examples, load_example  # noqa: E402
+
+DEFAULT = ["two_disks", "mms_segment_1d", "sod_shock_tube", "heated_plate_2d", "column_under_gravity_2d",
+           "polygon_2d", "elastic_cube_3d"]
+
+
+def _start(name: str, cache: Path, out: Path) -> tuple[subprocess.Popen, float]:
+    scene = out / f"{name}.json"
+    scene.parent.mkdir(parents=True, exist_ok=True)
+    scene.write_text(json.dumps(load_example(name)))
+    env = dict(os.environ, MPM_CACHE_DIR=str(cache))
+    command = [sys.executable, "-m", "solver", "run", str(scene), "-o", str(out / name), "--progress", "json"]
+    return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env), time.perf_counter()
+
+
+def _follow(process: subprocess.Popen, launched: float) -> dict:
+    """Read a run's progress lines as they come: its first step's time, its estimate, its done line."""
+    first_step = estimate = None
+    done = {}
+    for line in process.stdout:
+        if not line.startswith("{"):
+            continue
+        item, now = json.loads(line), time.perf_counter() - launched
+        if item.get("event") == "done":
+            done = item
+        elif estimate is None and item.get("eta_seconds") is not None and item.get("stage") == "compiling":
+            estimate = now + item["eta_seconds"]
+        if first_step is None and item.get("stage") == "stepping":
+            first_step = now
+    wall = time.perf_counter() - launched
+    if process.wait() != 0 or not done:
+        raise RuntimeError(process.stderr.read()[-2000:])
+    return {"first_step_s": first_step, "wall_s": wall, "compiled": done["compiled"],
+            "compile_s": done["compile_seconds"], "estimate_s": estimate,
+            "wall_over_estimate": wall / estimate if estimate else None}
+
+
+def run(name: str, cache: Path, out: Path) -> dict:
+    return _follow(*_start(name, cache, out))
+
+
+def together(names: list[str], cache: Path, out: Path) -> list[dict]:
+    started = [_start(name, cache, out / "together") for name in names]
+    return [{"example": name, **_follow(*pair)} for name, pair in zip(names, started)]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def serve_ready(cache: Path, data: Path, timeout: float = 300.0) -> float:
+    """Seconds from `mpm serve` to `/readyz` 200, on the given kernel cache."""
+    port = _free_port()
+    env = dict(os.environ, MPM_CACHE_DIR=str(cache), MPM_DATA_DIR=str(data), MPM_PORT=str(port))
+    env.pop("MPM_REDIS_URL", None)
+    launched = time.perf_counter()
+    process = subprocess.Popen([str(Path(sys.executable).with_name("mpm")), "serve", "--port", str(port)], cwd=ROOT, env=env,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        while time.perf_counter() - launched < timeout:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/readyz", timeout=2) as answer:
+                    if answer.status == 200:
+                        return time.perf_counter() - launched
+            except OSError:
+                pass
+            time.sleep(0.1)
+        raise RuntimeError("mpm serve was not ready in time")
+    finally:
+        process.terminate()
+        process.wait(60)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--examples", nargs="+", default=DEFAULT)
+    parser.add_argument("--all", action="store_true", help="every example")
+    parser.add_argument("--json", type=Path, help="write the figures here")
+    args = parser.parse_args()
+    names = list_examples() if args.all else args.examples
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="mpm-startup-") as tmp:
+        tmp = Path(tmp)
+        shared = tmp / "shared-cache"
+        for name in names:
+            cache = tmp / f"cache-{name}"
+            cold, warm = run(name, cache, tmp / "cold"), run(name, cache, tmp / "warm")
+            rows.append({"example": name, "cold": cold, "warm": warm})
+            print(f"{name:28s} cold: first step {cold['first_step_s']:6.1f} s, {cold['compiled']:3d} compiled "
+                  f"({cold['compile_s']:.1f} s), wall/estimate {cold['wall_over_estimate'] or 0:.2f} | warm: first "
+                  f"step {warm['first_step_s']:5.2f} s, {warm['compiled']} compiled, wall/estimate "
+                  f"{warm['wall_over_estimate'] or 0:.2f}", flush=True)
+            shutil.copytree(cache, shared, dirs_exist_ok=True)   # one version: the folders merge
+        four = together(names[:4], shared, tmp)
+        print("four at once, warm:", ", ".join(f"{r['example']} {r['compiled']} compiled, first step "
+                                               f"{r['first_step_s']:.2f} s" for r in four), flush=True)
+        ready = serve_ready(shared, tmp / "data")
+        print(f"mpm serve on a warm cache: /readyz 200 after {ready:.1f} s", flush=True)
+    if args.json:
+        args.json.write_text(json.dumps({"examples": rows, "together": four, "serve_ready_s": ready}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
