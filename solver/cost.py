@@ -244,7 +244,8 @@ def compile_seconds(scene, model: CostModel | None = None) -> float:
     if is_compiled(scene):
         return 0.0
     model = model or load_model()
-    table, dim = model.compile_seconds, scene.dimension
+    # `mpm calibrate` measures steps, not compilation: a calibration takes the shipped figures
+    table, dim = model.compile_seconds or _read(str(SHIPPED), SHIPPED.stat().st_mtime).compile_seconds, scene.dimension
     seconds = table.get(f"{dim}/{backend_name(scene)}", DEFAULT_COMPILE_SECONDS)
     models = {material.model for material in scene.materials.values()}
     return seconds + sum(table.get(f"{dim}/{name}", 0.0) for name in models)

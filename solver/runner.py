@@ -20,7 +20,6 @@ from solver import __version__
 from solver import checkpoint, cost, energy, series
 from solver.compile_meter import CompileMeter
 from solver.fields import frame_fields
-from solver.preview import finish_outputs
 from solver.progress import RateMeter
 from solver.scene import Scene, load_scene
 from solver.stepper import ExplicitMPM, Instability
@@ -151,6 +150,7 @@ def _run(scene, out_dir, started, compiling, progress, should_stop, resume, chec
         status = "complete" if reason == "finished" else "partial"
         writer.close(status)
     if domain.is_root:
+        from solver.preview import finish_outputs   # matplotlib: a second of imports, not before the first step
         finish_outputs(out_dir, scene)
     wall = wallclock.perf_counter() - started
     loop.report(wallclock.perf_counter(), stage="writing")
