@@ -216,6 +216,8 @@ def test_examples_schema_health_docs(api):
     assert api.get("/healthz").json() == {"status": "ok"}
     ready = api.get("/readyz")
     assert ready.status_code == 200 and ready.json()["workers"] == 2
+    health = api.get("/v1/health").json()
+    assert health["workers"] == ["w1@test", "w2@test"] and set(health["warming"]) <= {"w1@test"}
     assert api.get("/docs").status_code == 200
     assert "/v1/jobs" in api.get("/openapi.json").json()["paths"]
     assert api.get("/").status_code == 200

@@ -120,6 +120,19 @@ def test_workers_heartbeat(store):
     assert store.live_workers(5) == []
 
 
+def test_warming_workers_are_the_live_ones_that_said_so(store):
+    store.heartbeat("w1")
+    store.heartbeat("w2")
+    store.set_warming("w1", True)
+    store.set_warming("gone", True)   # a worker killed while warming up: not live, not listed
+    assert store.warming_workers() == ["w1"]
+    store.set_warming("w1", False)
+    assert store.warming_workers() == []
+    store.set_warming("w2", True)
+    store.worker_gone("w2")
+    assert store.warming_workers() == []
+
+
 def test_running_jobs_without_lease_are_requeued(store):
     alive, lost = _create(store, 2)
     for job_id in (alive, lost):
@@ -127,6 +140,7 @@ def test_running_jobs_without_lease_are_requeued(store):
     store.acquire_lease(alive, "w1", 30)
     assert store.requeue_orphans() == [lost]
     assert store.get(lost)["status"] == "queued" and store.get(lost)["progress"] == 0.0
+    assert store.get(lost)["stage"] == "queued"
     assert store.get(alive)["status"] == "running"
     assert [j["id"] for j in store.list("queued").jobs] == [lost]
     assert store.requeue_orphans() == []
