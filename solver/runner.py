@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from solver import __version__
-from solver import checkpoint, cost, energy, series
+from solver import checkpoint, cost, energy, precompile, series
 from solver.compile_meter import CompileMeter
 from solver.fields import frame_fields
 from solver.progress import RateMeter
@@ -281,7 +281,8 @@ def _progress(sim: ExplicitMPM, end: float, dt: float, rates: RateMeter, energie
 class _Compiling:
     """The run's first stage: numba loads or compiles the kernels until the first step is done.
 
-    Counts the compilations (Result.compiled); with a progress callback, a thread reports
+    Counts the compilations (Result.compiled) and, for a cold variant, starts the helper that
+    compiles the step from its other end (solver/precompile.py); with a progress callback, a thread reports
     stage "compiling" every REPORT_S with an ETA of the compilation left (the cost model's
     figure, solver/cost.py) plus the run's estimate, since the main thread is in the compiler
     and reports nothing. After the first step the variant is marked compiled, so that later
@@ -292,12 +293,14 @@ class _Compiling:
     def __init__(self, scene: Scene, started: float, progress):
         self.scene, self.started, self.progress = scene, started, progress
         self.meter = CompileMeter()
+        self.helper = None
         self.active = True
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._report, daemon=True) if progress is not None else None
 
     def __enter__(self) -> "_Compiling":
         self.meter.__enter__()
+        self.helper = precompile.start(self.scene)   # a cold variant on a machine with a core to spare
         if self._thread is not None:
             self._thread.start()
         return self
@@ -310,6 +313,7 @@ class _Compiling:
         if not self.active:
             return
         self.active = False
+        precompile.stop(self.helper)
         self._stop.set()
         if self._thread is not None:
             self._thread.join()

@@ -12,9 +12,14 @@ longer reads; pytest-dev/pytest-xdist#1386), and silently.
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
+
+# No precompiling helper beside cold runs (solver/precompile.py) but in its own test: whether
+# it starts depends on the machine's load, and a test's outcome must not.
+os.environ["MPM_PRECOMPILE"] = "0"
 
 SPREAD = {"unit/test_fused.py", "regression/test_regression.py"}
 

@@ -1,0 +1,111 @@
+"""Compiling a new variant from both ends: a helper process beside a cold run.
+
+numba compiles a kernel when it is first called, so a run compiles its step's kernels
+one after another in the order the scheme calls them, on one core. When the run's
+variant is not in the kernel cache and a core is idle, `start` launches this module as
+a second process on a coarse copy of the scene (one particle per cell: the same kernel
+signatures) that calls the phases after the weights in reverse order, and then the step
+hooks, so the two processes compile from both ends and each loads from the shared cache
+what the other saved first (solver/kernel_cache.py: saves of processes at once are
+safe). The helper only compiles: what its kernels compute on a state they were not
+meant for is thrown away (a phase that fails is skipped), and the run stops it after its
+own first step. `MPM_PRECOMPILE=0` turns it off (the test suite does, but for its own test).
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+from solver import cost
+from solver.thread_count import available_cores
+
+# Load average below (cores - IDLE_MARGIN): a core is free. On a busy machine a second
+# compiling process only takes time from the run.
+IDLE_MARGIN = 1.0
+
+
+def wanted(scene) -> bool:
+    """A cold, single-process run on a machine with a core to spare."""
+    if os.environ.get("MPM_PRECOMPILE", "1") == "0" or scene.parallel.processes > 1:
+        return False
+    cores = available_cores()
+    if cores < 2 or os.getloadavg()[0] > cores - IDLE_MARGIN:
+        return False
+    return not cost.is_compiled(scene)
+
+
+def coarse(document: dict) -> dict:
+    """The scene with one particle per cell in every body: fewer particles, the same kernels."""
+    bodies = []
+    for body in document["bodies"]:
+        ppc = body.get("particles_per_cell")
+        bodies.append({**body, "particles_per_cell": [1] * len(ppc) if isinstance(ppc, list) else 1}
+                      if ppc is not None else body)
+    return {**document, "bodies": bodies}
+
+
+def start(scene) -> subprocess.Popen | None:
+    """The helper process for `scene`, or None when it is not wanted or cannot start."""
+    if not wanted(scene):
+        return None
+    try:
+        with tempfile.NamedTemporaryFile("w", suffix=".json", prefix="mpm-precompile-", delete=False) as file:
+            json.dump(coarse(scene.model_dump(mode="json", exclude_unset=True)), file)
+        return subprocess.Popen([sys.executable, "-m", "solver.precompile", file.name],
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
+def stop(helper: subprocess.Popen | None) -> None:
+    """End the helper (its saves are whole files renamed into place: a kill loses none)."""
+    if helper is not None and helper.poll() is None:
+        helper.kill()
+        helper.wait()
+
+
+class _Recorder:
+    """Stands for the backend while a scheme runs: records the phase calls, runs none."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.calls: list[tuple[str, tuple, dict]] = []
+
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: self.calls.append((name, args, kwargs))
+
+
+def compile_backwards(sim, dt: float) -> None:
+    """Call the step's phases after the weights from last to first, then the step hooks."""
+    recorder = _Recorder(sim)
+    sim.scheme(recorder, dt)
+    first, *rest = recorder.calls
+    calls = [lambda: getattr(sim.phases, first[0])(*first[1], **first[2])]
+    calls += [lambda call=call: getattr(sim.phases, call[0])(*call[1], **call[2]) for call in reversed(rest)]
+    calls += [lambda hook=hook: hook(sim, dt) for hook in sim.hooks.end_step]
+    calls += [lambda hook=hook: hook(sim, sim.time + dt) for hook in sim.hooks.begin_step]
+    for call in calls:
+        try:
+            call()
+        except Exception:   # the kernel compiled before it ran on this made-up state: enough
+            continue
+
+
+def main(path: str) -> int:
+    from solver.runner import make_simulation
+    from solver.scene import load_scene
+
+    try:
+        scene = load_scene(json.loads(open(path).read()))
+    finally:
+        os.unlink(path)
+    sim = make_simulation(scene)
+    compile_backwards(sim, scene.time.dt or sim.stable_time_step(scene.time.cfl))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))

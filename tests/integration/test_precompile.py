@@ -1,0 +1,44 @@
+"""The helper that compiles a cold run's step from its other end (solver/precompile.py)."""
+import json
+import os
+import subprocess
+import sys
+
+from solver import precompile
+from solver.scene import load_scene
+
+SCENE = {"version": 1, "name": "helper", "dimension": 1, "method": {"scheme": "musl"},
+         "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},
+         "materials": {"m": {"model": "neo_hookean", "density": 1000.0, "youngs_modulus": 1000.0,
+                             "poisson_ratio": 0.3}},
+         "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25], "upper": [0.75]},
+                     "particles_per_cell": 3, "initial_velocity": [0.1]}],
+         "time": {"end": 0.005, "dt": 0.001}, "output": {"frames": 2}}
+
+
+def test_the_coarse_copy_keeps_the_scene_but_its_particle_counts():
+    coarse = precompile.coarse(SCENE)
+    assert coarse["bodies"][0]["particles_per_cell"] == 1
+    assert {**coarse, "bodies": SCENE["bodies"]} == SCENE
+    assert load_scene(coarse).dimension == 1
+
+
+def test_after_the_helper_a_run_compiles_almost_nothing(tmp_path):
+    """The helper alone (run to its end here) compiles the step's phases and hooks; the run
+    after it compiles only what lies outside the step (the output and the energy checks)."""
+    env = dict(os.environ, MPM_CACHE_DIR=str(tmp_path / "cache"), MPM_PRECOMPILE="0")
+    helper_scene = tmp_path / "coarse.json"
+    helper_scene.write_text(json.dumps(precompile.coarse(SCENE)))
+    subprocess.run([sys.executable, "-m", "solver.precompile", str(helper_scene)], env=env, check=True, timeout=600)
+    assert not helper_scene.exists()   # the helper removes its copy
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(SCENE))
+    done = subprocess.run([sys.executable, "-m", "solver", "run", str(scene), "-o", str(tmp_path / "out"),
+                           "--progress", "json"], env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    final = json.loads(done.stdout.splitlines()[-1])
+    cold = subprocess.run([sys.executable, "-m", "solver", "run", str(scene), "-o", str(tmp_path / "cold"),
+                           "--progress", "json"], env=dict(env, MPM_CACHE_DIR=str(tmp_path / "empty")),
+                          capture_output=True, text=True, timeout=600)
+    everything = json.loads(cold.stdout.splitlines()[-1])["compiled"]
+    assert final["compiled"] <= everything // 3, (final["compiled"], everything)
