@@ -1,4 +1,4 @@
-"""Cook's membrane, near-incompressible (docs/benchmarks.md, "F-bar: Cook's membrane").
+"""Cook's membrane, near-incompressible (docs/benchmarks.md, "F-bar").
 
     python benchmarks/cook.py            # MPM with and without F-bar, h = 4, 2, 1 (minutes)
     python benchmarks/cook.py --fem      # the finite element cross-check of the reference only

@@ -1,5 +1,5 @@
 """MUSL's KINEMATICS pass in 2D: the scalar `g2p` against the vectorised `g2p_kinematics`
-(solver/fused_template.py `_g2p_kinematics`; docs/benchmarks.md, issue 18, twentieth part).
+(solver/fused_template.py `_g2p_kinematics`; measured in docs/benchmarks.md at 486d120).
 
     python benchmarks/kinematics_pass.py [--repeats 11] [--threads 1]
 

@@ -1,5 +1,5 @@
-"""Variants of the 2D MLS kernels that were measured (docs/benchmarks.md, issue 18, seventeenth and
-eighteenth parts): where the P2G's time goes, what numba's SLP vectorizer does to them, and the
+"""Variants of the 2D MLS kernels that were measured (docs/benchmarks.md at 35cd95b
+and be2413e): where the P2G's time goes, what numba's SLP vectorizer does to them, and the
 vectorised G2P the solver keeps.
 
     python benchmarks/mls_kernel_variants.py [--repeats 11]

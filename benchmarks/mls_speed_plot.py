@@ -3,7 +3,6 @@
     for i in 1 2 3; do python benchmarks/throughput.py --frameworks-python PY --side-by-side-only \\
         --blocks 2:225:15 3:32:6 --json run_$i.json; done
     python benchmarks/mls_speed_plot.py run_*.json          # -> docs/images/mls_speed.png
-    python benchmarks/mls_speed_plot.py --image docs/images/mls_speed_third.png run_*.json
     python benchmarks/mls_speed_plot.py --image out.png --machine "16-core Xeon, quiet" run_*.json
 
 Each run has the five implementations side by side (benchmarks/throughput.py);

@@ -15,7 +15,7 @@ the same bits (checked). The solver does not do this: its step ends with the par
 complete and the grid free for anything between steps (output, migration, a new dt,
 hooks); this script measures what that costs at most.
 
-Measured (docs/benchmarks.md, "Speed, ninth part"): the fused pass is not faster here,
+Measured (docs/benchmarks.md at 735f9cb): the fused pass is not faster here,
 its best step 0.88-0.97 of the unfused one's rate over three runs on a 2-core AMD EPYC
 (pairs 0.82-1.18): the transfers are bound by their arithmetic and their nodal accesses,
 not by reading the particle arrays twice.

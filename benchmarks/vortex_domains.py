@@ -1,4 +1,4 @@
-"""How far the E7 vortex stretches CPDI-Q4's domains (docs/benchmarks.md, issue 17 second part).
+"""How far the E7 vortex stretches CPDI-Q4's domains (docs/benchmarks.md, "F-bar and CPDI").
 
     python benchmarks/vortex_domains.py
 

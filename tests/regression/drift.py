@@ -6,7 +6,7 @@ do not depend on the CPU. Runs use FMA contraction unless told otherwise, which 
 last bits of the fused kernels' sums; this script runs the cases with the environment's
 setting and prints, per case, the array that moved furthest from the stored fingerprint
 (relative to that array's magnitude, as the ROUND_OFF tolerance of test_regression.py reads
-it), the furthest first. Nothing is asserted: it is a measurement (docs/benchmarks.md).
+it), the furthest first. Nothing is asserted: it is a measurement.
 """
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ reproduction), so only the time integration and round-off remain: the issue's
 bound of 0.1 % over 10 revolutions is asserted. PIC's grid-to-particle transfer
 drops the rotation inside each stencil (the dissipation APIC was designed to
 remove), so it must lose more than that; FLIP-0.99 and PIC numbers are recorded
-in docs/benchmarks.md (benchmarks/transfers.py), not asserted further.
+in docs/benchmarks.md (benchmarks/shapes_and_transfers.py), not asserted further.
 """
 from __future__ import annotations
 

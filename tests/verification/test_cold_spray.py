@@ -102,8 +102,8 @@ def test_axisymmetric_and_3d_quarter_agree(tmp_path_factory):
 
 def test_published_speed_trends(tmp_path_factory):
     """Li et al. 2006 and Dykhuizen et al. 1999 on the coarse scene, single field, 400 / 600 /
-    800 m/s (docs/benchmarks.md, Cold spray, "Against published trends", has the whole series
-    400-800 m/s at both resolutions and with the contact)."""
+    800 m/s (`python benchmarks/cold_spray.py --trends` prints the whole series 400-800 m/s at
+    both resolutions and with the contact; docs/benchmarks.md, "Against published trends")."""
     measures = {}
     for speed in (400.0, 600.0, 800.0):
         scene = impact(coarse_axisymmetric(), speed)
@@ -124,7 +124,7 @@ def test_published_speed_trends(tmp_path_factory):
     # relative terms (the crater starts from nothing): from 400 to 800 m/s the crater grows by a
     # larger factor than D, even with every measure a cell off to the other side (measured: 2.8
     # against 1.29; the bound compares 1.58 with 1.48). In absolute terms it does not hold with
-    # the single field: D / d0 grows by 0.39 as the crater by 0.38 (docs/benchmarks.md).
+    # the single field: D / d0 grows by 0.39 as the crater by 0.38 (`cold_spray.py --trends`).
     crater_growth = (high["crater"] - cell) / (low["crater"] + cell)
     diameter_growth = (high["flattening"] + cell) / (low["flattening"] - cell)
     assert crater_growth > diameter_growth, measures
@@ -147,7 +147,7 @@ def test_particles_of_different_sizes_deform_alike(tmp_path_factory):
     # (at most 1.7 % at any rate above 1 /s). The splat is set by rho v^2 / sigma_y (with the
     # elastic terms, unchanged): 1.7 % less strength acts as 1.7 % more rho v^2, i.e. 0.87 %
     # more speed, 5.2 m/s at 600 m/s. The steepest measure near 600 m/s in the speed series
-    # (docs/benchmarks.md) is D / d0 at this resolution, 0.0028 per m/s (500 -> 700 m/s): 0.015.
+    # (`cold_spray.py --trends`) is D / d0 at this resolution, 0.0028 per m/s (500 -> 700 m/s): 0.015.
     # (Johnson-Cook damage's rate term moves the failure strain by D4 ln 2 / 1.24 = 0.8 %.)
     # Plus the measures' resolution, one cell over d0: 1 um / 20 um = 0.05. Measured: 0.007
     # (D / d0), 0.004 (h / d0), 0.004 (crater); 0.018 for D / d0 with 13 output frames (the
