@@ -84,9 +84,24 @@ class Union:
         return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
 
 
-# Vertices a polygon may have: bounds the self-intersection check (`first_crossing`),
-# whose worst case is O(n^2) pairs of edges.
+# Vertices a polygon may have, and all the polygons of a scene together: each inside test
+# (seeding, the stability check's samples) loops over the edges, so this bounds its cost.
 MAX_POLYGON_VERTICES = 10_000
+# Candidate pairs of edges the self-intersection check (`first_crossing`) tests at most
+# (about 0.3 s): outlines have a few per edge, but edges overlapping along both axes (a
+# star of thin spikes) make O(n^2), 25 million at 10,000 vertices (8 s). Past it the
+# polygon is refused as too complex to check, before any pair is tested.
+MAX_CROSSING_PAIRS = 1_000_000
+
+
+class TooComplex(ValueError):
+    """A polygon whose self-intersection check would test more than MAX_CROSSING_PAIRS pairs."""
+
+    def __init__(self, pairs: int):
+        super().__init__(f"its edges overlap along both axes so much that checking that it does not "
+                         f"intersect itself would test {pairs} pairs of edges, more than {MAX_CROSSING_PAIRS}; "
+                         "use fewer vertices, or a union of simpler polygons")
+        self.pairs = pairs
 
 
 @dataclass(frozen=True)
@@ -123,7 +138,8 @@ class Polygon:
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
 
 
-def first_crossing(vertices: np.ndarray, chunk: int = 1 << 20) -> tuple[int, int] | None:
+def first_crossing(vertices: np.ndarray, chunk: int = 1 << 20,
+                   max_pairs: int = MAX_CROSSING_PAIRS) -> tuple[int, int] | None:
     """The first pair of edges (i, j), i < j, of a closed polygon that touch or cross
     although they are not neighbours (edge i runs from vertex i to vertex i + 1), or
     neighbours that fold back onto each other; None for a simple polygon.
@@ -132,8 +148,8 @@ def first_crossing(vertices: np.ndarray, chunk: int = 1 << 20) -> tuple[int, int
     coordinate, each paired only with the later ones whose range overlaps its own (a
     `searchsorted`), and those pairs whose boxes overlap tested exactly, `chunk` pairs
     at a time. Near-linear for the outlines scenes have (10,000 vertices on a circle:
-    10 ms); at worst (long edges overlapping along both axes) O(n^2) pairs, about 10 s
-    at MAX_POLYGON_VERTICES."""
+    10 ms); at worst (long edges overlapping along both axes) O(n^2) pairs: more than
+    `max_pairs` raise TooComplex at once (the count is known before any pair is tested)."""
     p = np.asarray(vertices, dtype=np.float64)
     q = np.roll(p, -1, axis=0)
     n = len(p)
@@ -141,6 +157,8 @@ def first_crossing(vertices: np.ndarray, chunk: int = 1 << 20) -> tuple[int, int
     scale = float(np.max(np.abs(p))) or 1.0
     eps = 1e-12 * scale * scale
     order, counts = min((_sweep(low[:, a], high[:, a], 1e-12 * scale) for a in (0, 1)), key=lambda s: s[1].sum())
+    if counts.sum() > max_pairs:
+        raise TooComplex(int(counts.sum()))
     found = []
     start = 0
     while start < n:

@@ -30,7 +30,7 @@ ENERGY_GROWTH_LIMIT = 2.0
 # ... plus this fraction of sum(m c^2), so round-off around a zero-energy state is not flagged.
 ENERGY_FLOOR = 1e-6
 PROGRESS_INTERVAL_S = 0.25
-MAX_SERIES_POINTS = 20_000
+MAX_SERIES_POINTS = series.MAX_SERIES_POINTS
 # Times closer than this fraction of a step count as equal (output times, the end time):
 # one tolerance for both, so the last frame and the end are reached on the same step.
 TIME_TOLERANCE = 1e-6
@@ -90,17 +90,21 @@ class _StopSignals:
 
 
 class _FrameSchedule:
-    """`frames` output times evenly spaced over [0, end], first and last included."""
+    """`frames` output times evenly spaced over [0, end], first and last included; each
+    computed when it is next (no list: the memory does not grow with the frame count)."""
 
     def __init__(self, end: float, frames: int):
-        self.times = [end * k / (frames - 1) for k in range(frames)]
+        self.end, self.count = end, frames
         self.next = 0
 
+    def time(self, k: int) -> float:
+        return self.end * k / (self.count - 1)
+
     def due(self, t: float, dt: float) -> bool:
-        return self.next < len(self.times) and t >= self.times[self.next] - TIME_TOLERANCE * dt
+        return self.next < self.count and t >= self.time(self.next) - TIME_TOLERANCE * dt
 
     def until_next(self, t: float) -> float:
-        return self.times[self.next] - t if self.next < len(self.times) else math.inf
+        return self.time(self.next) - t if self.next < self.count else math.inf
 
 
 def run(

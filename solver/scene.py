@@ -56,7 +56,9 @@ from solver.schema import (
     NonNegative,
     Positive,
     Real,
+    MAX_COUNT,
     SceneModel,
+    count_up,
     fmt,
     problems_at,
     require_supported,
@@ -285,8 +287,23 @@ class PolygonGeometry(_Geometry):
 
     @field_validator("vertices")
     @classmethod
-    def _simple(cls, vertices: list[list[float]]) -> list[list[float]]:
-        crossing = geometry_shapes.first_crossing(np.array(vertices, dtype=np.float64))
+    def _simple(cls, vertices: list[list[float]], info: ValidationInfo) -> list[list[float]]:
+        # the scene's polygons together, counted as they are validated: a union of thousands
+        # is refused at the one that passes the cap, before its own check runs
+        seen = (info.context or {}).get("polygon_vertices")   # [count, refused already]
+        if seen is not None:
+            seen[0] += len(vertices)
+            if seen[1]:
+                return vertices   # the scene is refused at the first polygon past the cap: said once
+            if seen[0] > geometry_shapes.MAX_POLYGON_VERTICES:
+                seen[1] = True
+                raise scene_error(f"the scene's polygons have {seen[0]} vertices so far, more than "
+                                  f"{geometry_shapes.MAX_POLYGON_VERTICES} together (each inside test loops "
+                                  "over every edge)")
+        try:
+            crossing = geometry_shapes.first_crossing(np.array(vertices, dtype=np.float64))
+        except geometry_shapes.TooComplex as exc:
+            raise scene_error(f"the polygon is too complex: {exc}") from None
         if crossing is not None:
             i, j = crossing
             n = len(vertices)
@@ -631,13 +648,14 @@ class Time(SceneModel):
         millionth of a step (3.5 / 0.001 is 3500); None if adaptive."""
         if self.dt is None:
             return None
-        return max(1, math.ceil(self.end / self.dt - 1e-6))
+        return max(1, count_up(self.end / self.dt - 1e-6))   # 1e308 / 1e-308 is a count, not an error
 
     @model_validator(mode="after")
     def _steps_within_guard(self) -> "Time":
         steps = self.fixed_steps()
         if steps is not None and steps > self.max_steps:
-            raise problems_at([("dt", f"end / dt = {steps} steps, more than max_steps = {self.max_steps}")])
+            shown = steps if steps < MAX_COUNT else f"{self.end / self.dt:.3g}"
+            raise problems_at([("dt", f"end / dt = {shown} steps, more than max_steps = {self.max_steps}")])
         return self
 
 
@@ -787,8 +805,9 @@ class Scene(SceneModel):
             upper = np.array(self.grid.upper)
         else:
             upper = self._bodies_box()[1] + 2 * np.array(self.cell_sizes())
-        cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
-        cells = [max(1, math.ceil(n - 1e-9)) for n in cells]
+        with np.errstate(over="ignore", invalid="ignore"):   # an infinite extent: MAX_COUNT cells
+            cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
+        cells = [max(1, count_up(float(n) - 1e-9)) for n in cells]
         if shape_functions.REGISTRY[self.method.shape_function].even_cells:   # elements of two cells (bernstein)
             cells = [n + n % 2 for n in cells]
         return tuple(cells)
@@ -842,6 +861,8 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         length_ok("grid.upper", scene.grid.upper),
         length_ok("grid.cell_size", scene.grid.cell_size if isinstance(scene.grid.cell_size, list) else None),
     ])
+    if grid_ok and scene.grid.lower is not None and scene.grid.upper is not None:
+        grid_ok = _grid_extent_ok(scene, problems)
     if scene.axisymmetric and scene.grid.lower is not None and scene.grid.lower[0] < 0:
         problems.append(("grid.lower[0]", "must be >= 0 in an axisymmetric scene (x is the radius r)"))
     if scene.method.formulation == "ulmpm":
@@ -877,6 +898,8 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         if scene.method.formulation == "ulmpm" and grid_ok and geometry_ok:
             problems += _outside_grid(f"{path}.geometry", body, scene)
 
+    if grid_ok and (scene.grid.lower is None or scene.grid.upper is None) and not problems:
+        grid_ok = _grid_extent_ok(scene, problems)   # the bodies' box (tlmpm), once the geometries are sound
     if grid_ok and scene.grid.lower is not None and scene.grid.upper is not None:
         problems += _shape_function_problems(scene)
 
@@ -885,6 +908,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         problems.append(("damping", f"is not supported yet with several processes "
                                     f"(parallel.processes = {scene.parallel.processes})"))
 
+    problems += _frame_problems(scene)
     problems += _condition_problems(scene, length_ok)
     problems += thermal_problems(scene, THERMAL_CONDITIONS, length_ok)
     problems += _contact_problems(scene, names)
@@ -892,6 +916,34 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     if grid_ok:
         problems += slab_problems(scene)
     return problems
+
+
+def _grid_extent_ok(scene: Scene, problems: list[tuple[str, str]]) -> bool:
+    """False (and the problem) when an axis has no finite count of cells: (upper - lower) /
+    cell_size overflows (a grid from -1e308 to 1e308). A finite count, however large, is
+    left to the limits, which name it with the setting."""
+    counts = scene.grid_shape()
+    axes = [a for a, n in enumerate(counts) if n >= MAX_COUNT]
+    for a in axes:
+        problems.append(("grid", f"axis {a}: (upper - lower) / cell_size is not a finite number of cells "
+                                 f"(over {MAX_COUNT:.3g}); give a grid of sensible extent and cell size"))
+    return not axes
+
+
+def _frame_problems(scene: Scene) -> list[tuple[str, str]]:
+    """At most a frame a step (first and last included): frames <= steps + 1, the steps being
+    end / dt for a fixed dt, else time.max_steps (the run stops there whatever dt does).
+    More frames than that would each make the runner shorten a step to land on it. The
+    default (51) is left alone: short test runs rely on it, and it bounds nothing."""
+    if "frames" not in scene.output.model_fields_set:
+        return []
+    steps = scene.time.fixed_steps()
+    bound, source = (steps, "end / dt") if steps is not None else (scene.time.max_steps, "time.max_steps")
+    if scene.output.frames <= bound + 1:
+        return []
+    shown = scene.output.frames if scene.output.frames < MAX_COUNT else f"{scene.output.frames:.3g}"
+    return [("output.frames", f"{shown} frames, more than the {bound} time steps ({source}) + 1: "
+                              "a run writes at most one frame a step, the first and the last included")]
 
 
 def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
@@ -1186,6 +1238,7 @@ class Limits:
     max_particles: int | None = None
     max_grid_nodes: int | None = None
     max_steps: int | None = None
+    max_memory_bytes: int | None = None   # the estimate of solver.summary.memory_estimate
 
 
 # What one machine could hold at all: `mpm validate` checks these before counting, so an
@@ -1211,15 +1264,17 @@ def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None
         if files is None and _is_path(source):
             files = Path(source).resolve().parent
         try:
-            scene = Scene.model_validate(data, context={"files": files})
+            scene = Scene.model_validate(data, context={"files": files, "polygon_vertices": [0, False]})
         except ValidationError as exc:
             raise SceneError(_format_errors(exc, data)) from None
-    problems = _limit_problems(scene, limits) if limits is not None else []
-    if stability and not problems:   # the stability limit reads a sound scene of a size within the limits
+    over = _limit_problems(scene, limits) if limits is not None else []
+    if over:   # each names the Limits field it is over ("limit"), for the service to name its setting
+        raise SceneError([{"path": path, "message": message, "limit": limit} for path, message, limit in over])
+    if stability:   # the stability limit reads a sound scene of a size within the limits
         from solver.stability import time_step_problems   # (it reads this module's constants)
         problems = time_step_problems(scene)
-    if problems:
-        raise SceneError([{"path": path, "message": message} for path, message in problems])
+        if problems:
+            raise SceneError([{"path": path, "message": message} for path, message in problems])
     return scene
 
 
@@ -1337,31 +1392,37 @@ def _message(error: dict) -> str:
 COUNT_FACTOR = 8
 
 
-def _limit_problems(scene: Scene, limits: Limits) -> list[tuple[str, str]]:
-    """Every limit decided before any loop or allocation proportional to the scene's size:
-    nodes and steps from arithmetic, particles from the candidates' count (arithmetic),
-    counted only when that is within COUNT_FACTOR times the limit."""
+def _limit_problems(scene: Scene, limits: Limits) -> list[tuple[str, str, str]]:
+    """(path, message, the Limits field) of every limit decided before any loop or allocation
+    proportional to the scene's size: nodes and steps from arithmetic, particles from the
+    candidates' count (arithmetic), counted only when that is within COUNT_FACTOR times the
+    limit; the memory, within those, from the candidates (an upper bound of the particles)."""
     # Imported here: summary and seeding read the Scene defined in this module.
     from solver.seeding import count_candidates, count_particles
-    from solver.summary import estimate_steps
+    from solver.summary import estimate_steps, memory_limit_problem
 
     problems = []
-    if limits.max_grid_nodes is not None:
-        nodes = math.prod(n + 1 for n in scene.grid_shape())
-        if nodes > limits.max_grid_nodes:
-            problems.append(("grid", f"{nodes} grid nodes, over the limit of {limits.max_grid_nodes}"))
+    nodes = math.prod(n + 1 for n in scene.grid_shape())
+    if limits.max_grid_nodes is not None and nodes > limits.max_grid_nodes:
+        problems.append(("grid", f"{nodes} grid nodes, over the limit of {limits.max_grid_nodes}", "max_grid_nodes"))
     if limits.max_steps is not None:
         steps = estimate_steps(scene)
         if steps > limits.max_steps:
-            problems.append(("time", f"about {steps} time steps, over the limit of {limits.max_steps}"))
+            problems.append(("time", f"about {steps} time steps, over the limit of {limits.max_steps}", "max_steps"))
+    candidates, tests = count_candidates(scene)
     if limits.max_particles is not None:
-        candidates, tests = count_candidates(scene)
         if tests > COUNT_FACTOR * limits.max_particles:
             problems.append(("bodies", f"the bodies' bounding boxes hold {candidates:.3g} candidate particles "
                                        f"(overlapping cells x particles_per_cell^{scene.dimension}), "
                                        f"{tests:.3g} point-in-shape tests with their geometries' parts: more "
-                                       f"than {COUNT_FACTOR} x the limit of {limits.max_particles} particles"))
+                                       f"than {COUNT_FACTOR} x the limit of {limits.max_particles} particles",
+                             "max_particles"))
         elif candidates > limits.max_particles:
             if sum(count_particles(scene, stop_above=limits.max_particles)) > limits.max_particles:
-                problems.append(("bodies", f"more particles than the limit of {limits.max_particles}"))
+                problems.append(("bodies", f"more particles than the limit of {limits.max_particles}",
+                                 "max_particles"))
+    if limits.max_memory_bytes is not None and not problems:
+        memory = memory_limit_problem(scene, candidates, nodes, limits.max_memory_bytes)
+        if memory is not None:
+            problems.append((*memory, "max_memory_bytes"))
     return problems

@@ -113,3 +113,21 @@ class ElasticMaterial(BaseMaterial):
         """sqrt((lambda + 2 mu) / rho)."""
         lam, mu = self.lame_parameters()
         return math.sqrt((lam + 2 * mu) / self.density)
+
+
+# Counts (cells, steps, frames) derived from a scene's floats: past this they are "more than
+# anything a limit allows", so an absurd ratio (1e308 / 1e-308, or an infinite extent) stays
+# a Python int that the limits compare, never an OverflowError in math.ceil / math.floor.
+MAX_COUNT = 2**62
+
+
+def count_up(value: float) -> int:
+    """ceil(value) for a count, at most MAX_COUNT (infinite or NaN counts as MAX_COUNT)."""
+    return math.ceil(value) if value < MAX_COUNT else MAX_COUNT   # NaN < x is False: MAX_COUNT
+
+
+def count_down(value: float) -> int:
+    """floor(value) for a cell index, clamped to [-MAX_COUNT, MAX_COUNT]."""
+    if not value > -MAX_COUNT:   # -inf and NaN
+        return -MAX_COUNT
+    return math.floor(value) if value < MAX_COUNT else MAX_COUNT

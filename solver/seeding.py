@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from solver.schema import count_down
+
 if TYPE_CHECKING:
     from solver.scene import Body, Scene
 
@@ -98,8 +100,8 @@ def candidate_cells(scene: Scene, body: Body) -> list[tuple[int, int]]:
     grid_lower, shape, sizes = scene.grid_lower(), scene.grid_shape(), scene.cell_sizes()
     ranges = []
     for a in range(scene.dimension):
-        first = max(0, math.floor((lower[a] - grid_lower[a]) / sizes[a]))
-        stop = min(shape[a], math.floor((upper[a] - grid_lower[a]) / sizes[a]) + 1)
+        first = max(0, count_down((lower[a] - grid_lower[a]) / sizes[a]))   # an infinite ratio clamps
+        stop = min(shape[a], count_down((upper[a] - grid_lower[a]) / sizes[a]) + 1)
         ranges.append((first, max(first, stop)))
     return ranges
 

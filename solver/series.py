@@ -18,6 +18,10 @@ from typing import Callable
 
 import numpy as np
 
+# Rows of the energy series when `output.energies` is true: every step up to this many
+# (solver/runner.py thins them out past it; solver/summary.py counts their memory).
+MAX_SERIES_POINTS = 20_000
+
 AXES = "xyz"
 
 

@@ -17,6 +17,8 @@ from pydantic import BaseModel, Field
 from solver import cost, stability
 from solver import shape as shape_functions
 from solver.scene import Scene
+from solver.schema import count_up
+from solver.series import MAX_SERIES_POINTS
 from solver.seeding import count_particles
 
 
@@ -101,7 +103,8 @@ def estimate_steps(scene: Scene) -> int:
     fixed = scene.time.fixed_steps()
     if fixed is not None:
         return fixed
-    return max(1, math.ceil(scene.time.end / time_step(scene)))
+    dt = time_step(scene)
+    return max(1, count_up(scene.time.end / dt if dt > 0 else math.inf))   # dt underflowed: no end in sight
 
 
 def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
@@ -115,3 +118,64 @@ def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
     per_particle = 8 * (2 * dim + 2 * dim * dim + 9 + 4 + 1 + touched * (1 + dim) + touched) + 4
     per_node = 8 * (1 + 3 * dim) + (8 * (1 + dim) if scene.contact.fields else 0)
     return particles * per_particle + nodes * per_node * scene.grid_fields()
+
+
+# Values per particle of an output field in a frame (solver/fields.py); 1 for the scalars.
+_FRAME_FIELD_WIDTH = {"position": "dim", "velocity": "dim", "stress": 6, "deformation_gradient": "dim2"}
+_BODY_BYTES = 4096          # a body's own objects (its geometry, material, expressions), roughly
+_FRAME_BYTES = 256          # a frame's bookkeeping (its HDF5 group and attributes in the writer)
+_SERIES_VALUE_BYTES = 16    # a buffered row's float and its dataset value
+
+
+def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
+    """The bytes a run holds at once, by the scene path that makes them (what a limit
+    error names): arithmetic on the scene, nothing allocated. "bodies" is the particle
+    arrays (memory_bytes) and each body's own objects, "grid" the grid's arrays, "output.frames"
+    one gathered frame and every frame's bookkeeping, "output.series" the energy and
+    `output.series` rows (one column per body and axis for momentum and center_of_mass)."""
+    dim = scene.dimension
+    widths = {"dim": dim, "dim2": dim * dim}
+    frame_width = 3 + sum(widths.get(w, w) if isinstance(w, str) else w for w in
+                          (_FRAME_FIELD_WIDTH.get(name, 1) for name in scene.output.fields))
+    steps = estimate_steps(scene)
+    energies = scene.output.energies
+    if energies is False:
+        rows = 0
+    else:
+        stride = max(1, count_up(steps / MAX_SERIES_POINTS)) if energies is True else int(energies)
+        rows = steps // stride + 2
+    per_body_columns = {"momentum": dim, "center_of_mass": dim}
+    columns = 8 + sum(per_body_columns.get(name, 0) * len(scene.bodies) for name in scene.output.series) \
+        + dim * (len(scene.boundary_conditions) + len(scene.bodies)) * ("reactions" in scene.output.series)
+    return {"bodies": memory_bytes(scene, particles, 0) + _BODY_BYTES * len(scene.bodies),
+            "grid": memory_bytes(scene, 0, nodes),
+            "output.frames": 2 * 8 * frame_width * particles + _FRAME_BYTES * scene.output.frames,
+            "output.series": _SERIES_VALUE_BYTES * rows * columns}
+
+
+def memory_limit_problem(scene: Scene, particles: int, nodes: int, limit: int) -> tuple[str, str] | None:
+    """(the path of the largest part, why) when the estimate is over `limit`, else None."""
+    parts = memory_estimate(scene, particles, nodes)
+    total = sum(parts.values())
+    if total <= limit:
+        return None
+    largest = max(parts, key=parts.get)
+    shown = ", ".join(f"{path} {_gib(size)}" for path, size in parts.items())
+    return largest, (f"the run would need about {_gib(total)} of memory ({shown}), over the limit of "
+                     f"{_gib(limit)}; {largest} takes the most")
+
+
+def _gib(size: int) -> str:
+    return f"{size / 2**30:.3g} GiB"
+
+
+def empty_bodies(scene: Scene, per_body: list[int]) -> list[tuple[str, str]]:
+    """(path, why) of each body that seeds no particle (it lies between the particle
+    positions of its cells, or its cells are huge), and of a scene with none at all."""
+    problems = [(f"bodies[{i}]", f"body {body.name!r} seeds no particle: no particle position of its cells "
+                                 f"(particles_per_cell = {body.particles_per_cell} per axis) falls inside its "
+                                 "geometry; make it larger than a cell, or the cells smaller")
+                for i, (body, count) in enumerate(zip(scene.bodies, per_body)) if count == 0]
+    if per_body and len(problems) == len(per_body) and len(problems) > 1:
+        problems.append(("bodies", "no body seeds a particle: the scene has nothing to simulate"))
+    return problems

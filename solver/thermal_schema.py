@@ -9,6 +9,8 @@ rho c h^2 / (2 d k) for cubic cells, as [R] 5.3.3 states it for 1D.
 """
 from __future__ import annotations
 
+import math
+
 from solver.schema import ElasticMaterial, fmt
 
 THERMAL_KEYS = ("thermal_conductivity", "specific_heat", "thermal_expansion")
@@ -27,7 +29,8 @@ def expands(scene) -> bool:
 def conduction_time_step(scene) -> tuple[float, str] | None:
     """(the largest stable dt of conduction, the material that sets it), or None without conduction."""
     cell = scene.cell_sizes()
-    inverse_h2 = sum(1.0 / h**2 for h in cell)
+    # (1/h)^2, not 1/h^2: h**2 raises OverflowError past h = 1e154, (1/h)^2 underflows to 0
+    inverse_h2 = sum((1.0 / h) ** 2 for h in cell)
     best = None
     for body in scene.bodies:
         material = scene.materials.get(body.material)
@@ -36,7 +39,8 @@ def conduction_time_step(scene) -> tuple[float, str] | None:
         density = body.initial_density or getattr(material, "density", None)
         if not density:
             continue
-        limit = density * material.specific_heat / (2.0 * material.thermal_conductivity * inverse_h2)
+        conductance = 2.0 * material.thermal_conductivity * inverse_h2
+        limit = density * material.specific_heat / conductance if conductance > 0 else math.inf
         if best is None or limit < best[0]:
             best = (limit, body.material)
     return best
