@@ -60,9 +60,11 @@ class Settings(BaseSettings):
     # Webhooks (worker/webhooks.py): a job's or a sweep's final record POSTed to its callback_url.
     webhook_secret: str | None = Field(None, description="key of the X-MPM-Signature HMAC-SHA256; "
                                                          "unset: callback_url is refused")
-    webhook_allow: str = Field("127.0.0.0/8,::1,localhost",
+    webhook_allow: str = Field("127.0.0.0/8:1024-65535,[::1]:1024-65535,localhost:1024-65535",
                                description="comma-separated networks (CIDR) and host names a "
-                                           "callback_url may point to; default: loopback only")
+                                           "callback_url may point to, each with an optional :PORT or "
+                                           ":FIRST-LAST; default: loopback, unprivileged ports only (the "
+                                           "service's own Redis port is refused whatever this says)")
 
     log_level: str = "INFO"
 

@@ -6,16 +6,20 @@ A delivery is queued in Redis by the same script that finishes the job (core/sto
 so every way a job ends notifies once; the workers' sender threads (worker/webhooks.py)
 deliver it, never a task or a request: a slow receiver blocks nobody. A failed try is
 retried with backoff (1, 2, 4, 8 s), at most MAX_TRIES tries. URLs are allowed by
-MPM_WEBHOOK_ALLOW (default loopback only), checked at submission and again, on the
-addresses the name resolves to, at each delivery.
+MPM_WEBHOOK_ALLOW (default: loopback, unprivileged ports only), never the service's own
+Redis, checked at submission and again at each delivery, which connects to the very
+address that check resolved (no second lookup).
 """
 from __future__ import annotations
 
 import hashlib
 import hmac
 import ipaddress
+import re
 import socket
 import time
+from dataclasses import dataclass
+from typing import Any
 from urllib.parse import urlsplit
 
 from core.settings import Settings
@@ -39,44 +43,105 @@ def signature(body: bytes, secret: str) -> str:
     return "sha256=" + hmac.new(secret.encode(), body, hashlib.sha256).hexdigest()
 
 
-def _allowed(settings: Settings) -> tuple[list, set[str]]:
-    networks, names = [], set()
-    for entry in (part.strip() for part in settings.webhook_allow.split(",")):
-        if not entry:
-            continue
-        try:
-            networks.append(ipaddress.ip_network(entry, strict=False))
-        except ValueError:
-            names.add(entry.lower())
-    return networks, names
+# Characters a URL must not hold: C0 controls (CR, LF: header injection when the URL reaches
+# the request line), DEL, the C1 controls and spaces. (urllib and http.client refuse some at
+# delivery with exceptions of their own; the rule refuses them all at submission.)
+_FORBIDDEN = re.compile(r"[\x00-\x20\x7f-\x9f]")
+
+
+@dataclass(frozen=True)
+class _Entry:
+    """One MPM_WEBHOOK_ALLOW entry: a network or a host name, and the ports it allows."""
+    network: Any            # ipaddress network, or None for a name
+    name: str | None
+    ports: tuple[int, int]  # first, last (1-65535 when the entry gives none)
+
+    def admits(self, host: str, address: Any, port: int) -> bool:
+        if not self.ports[0] <= port <= self.ports[1]:
+            return False
+        return host == self.name if self.network is None else address is not None and address in self.network
+
+
+def _entry(text: str) -> _Entry:
+    """`127.0.0.0/8`, `localhost`, `::1`, with an optional `:PORT` or `:FIRST-LAST`
+    (`127.0.0.0/8:1024-65535`, `[::1]:8000`, `hooks.example.org:443`)."""
+    host, ports = text, ""
+    if text.startswith("["):
+        host, _, rest = text[1:].partition("]")
+        ports = rest.removeprefix(":")
+    elif text.count(":") == 1:
+        host, ports = text.split(":")
+    first, _, last = ports.partition("-")
+    try:
+        span = (int(first), int(last or first)) if first else (1, 65535)
+    except ValueError:   # a mistyped port admits nothing rather than everything
+        span = (1, 0)
+    try:
+        return _Entry(ipaddress.ip_network(host, strict=False), None, span)
+    except ValueError:
+        return _Entry(None, host.lower(), span)
+
+
+def _allowed(settings: Settings) -> list[_Entry]:
+    return [_entry(part.strip()) for part in settings.webhook_allow.split(",") if part.strip()]
+
+
+def _own_redis(settings: Settings) -> tuple[str, int] | None:
+    """(host, port) of the service's Redis: never a webhook's target, whatever the allow-list."""
+    if not settings.redis_url:
+        return None
+    try:
+        parts = urlsplit(settings.redis_url)
+        return (parts.hostname or "localhost").lower(), parts.port or 6379
+    except ValueError:
+        return None
 
 
 def check_url(url: str, settings: Settings, resolve: bool = True) -> str:
-    """The URL if a webhook may go there: http(s), no credentials, a host that is one of
-    MPM_WEBHOOK_ALLOW's names or whose every address is in its networks."""
+    """The URL if a webhook may go there (see `checked_target`); WebhookUrlError naming the rule."""
+    checked_target(url, settings, resolve)
+    return url
+
+
+def checked_target(url: str, settings: Settings, resolve: bool = True) -> tuple[str, int, Any]:
+    """(host, port, the address to connect to) of a URL a webhook may go to: http(s), no
+    control characters or spaces, no credentials, a host:port that MPM_WEBHOOK_ALLOW admits
+    (a name listed, or every address it resolves to in a listed network, on a listed port),
+    never the service's own Redis. The delivery connects to the address returned, so the
+    name is not resolved a second time (DNS rebinding: a name that answered an allowed
+    address to the check and another to the connection)."""
     if not settings.webhook_secret:
         raise WebhookUrlError("webhooks are off on this service (MPM_WEBHOOK_SECRET is not set)")
+    bad = _FORBIDDEN.search(url)
+    if bad:
+        raise WebhookUrlError(f"must not contain control characters or spaces (U+{ord(bad.group()):04X} at "
+                              f"position {bad.start()})")
     try:
         parts = urlsplit(url)
-        parts.port  # noqa: B018 - raises on a bad port
+        port = parts.port or (443 if parts.scheme == "https" else 80)
     except ValueError as exc:
         raise WebhookUrlError(f"not a URL: {exc}") from None
     if parts.scheme not in ("http", "https") or not parts.hostname:
         raise WebhookUrlError("must be an http:// or https:// URL with a host")
     if parts.username or parts.password:
         raise WebhookUrlError("must not carry credentials")
-    networks, names = _allowed(settings)
     host = parts.hostname.lower()
-    if host in names:
-        return url
-    for address in _addresses(host, parts.port, resolve):
-        if not any(address in network for network in networks):
-            raise WebhookUrlError(f"host {host} ({address}) is not allowed by MPM_WEBHOOK_ALLOW "
+    entries = _allowed(settings)
+    addresses = _addresses(host, port, resolve or any(e.name == host for e in entries))
+    redis_target = _own_redis(settings)
+    for address in addresses:
+        if redis_target and port == redis_target[1] and (address.is_loopback or str(address) == redis_target[0]
+                                                           or host == redis_target[0]):
+            raise WebhookUrlError(f"port {port} of {host} is the service's own Redis (MPM_REDIS_URL)")
+        if any(entry.admits(host, None, port) for entry in entries if entry.network is None):
+            continue
+        if not any(entry.admits(host, address, port) for entry in entries if entry.network is not None):
+            raise WebhookUrlError(f"host {host} ({address}) port {port} is not allowed by MPM_WEBHOOK_ALLOW "
                                   f"({settings.webhook_allow})")
-    return url
+    return host, port, addresses[0]
 
 
-def _addresses(host: str, port: int | None, resolve: bool) -> list:
+def _addresses(host: str, port: int, resolve: bool) -> list:
     try:
         return [ipaddress.ip_address(host)]
     except ValueError:
@@ -84,9 +149,11 @@ def _addresses(host: str, port: int | None, resolve: bool) -> list:
     if not resolve:
         raise WebhookUrlError(f"host {host} is not one of MPM_WEBHOOK_ALLOW's names")
     try:
-        infos = socket.getaddrinfo(host, port or 80, type=socket.SOCK_STREAM)
-    except OSError as exc:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except (OSError, UnicodeError) as exc:
         raise WebhookUrlError(f"host {host} cannot be resolved: {exc}") from None
+    if not infos:
+        raise WebhookUrlError(f"host {host} resolves to no address")
     return [ipaddress.ip_address(info[4][0].split("%")[0]) for info in infos]
 
 

@@ -4,12 +4,14 @@ and queues a failed one again with backoff, at most MAX_TRIES tries. It runs bes
 the jobs, so a slow or dead receiver delays no job and no API request."""
 from __future__ import annotations
 
+import http.client
 import json
 import logging
+import socket
+import ssl
 import threading
-import urllib.error
-import urllib.request
 from typing import Any
+from urllib.parse import urlsplit
 
 import redis
 
@@ -29,27 +31,47 @@ return due
 """
 
 
-class _NoRedirect(urllib.request.HTTPRedirectHandler):
-    """A receiver's redirect is not followed (it could point anywhere): the try fails."""
+class _PinnedHTTP(http.client.HTTPConnection):
+    """Connects to the address the URL check resolved, not to the name again."""
 
-    def redirect_request(self, *args: Any) -> None:
-        return None
+    def __init__(self, host: str, address: str, **kwargs: Any):
+        super().__init__(host, **kwargs)
+        self._address = address
+
+    def connect(self) -> None:
+        self.sock = socket.create_connection((self._address, self.port), self.timeout)
 
 
-_opener = urllib.request.build_opener(_NoRedirect)
+class _PinnedHTTPS(http.client.HTTPSConnection):
+    """TLS to the checked address; the certificate is still verified against the URL's name."""
+
+    def __init__(self, host: str, address: str, **kwargs: Any):
+        super().__init__(host, context=ssl.create_default_context(), **kwargs)
+        self._address = address
+
+    def connect(self) -> None:
+        sock = socket.create_connection((self._address, self.port), self.timeout)
+        self.sock = self._context.wrap_socket(sock, server_hostname=self.host)
 
 
-def post(url: str, body: bytes, headers: dict[str, str]) -> str | None:
-    """POST; None when the receiver answered 2xx, else why not."""
-    request = urllib.request.Request(url, data=body, method="POST",
-                                     headers={"Content-Type": "application/json", **headers})
+def post(url: str, body: bytes, headers: dict[str, str], settings: Settings) -> str | None:
+    """POST to the address the allow-list check resolved (no second lookup); None when the
+    receiver answered 2xx, else why not. A redirect is not followed (it could point
+    anywhere): the try fails. Raises webhooks.WebhookUrlError when the URL is not allowed."""
+    host, port, address = webhooks.checked_target(url, settings)
+    parts = urlsplit(url)
+    kind = _PinnedHTTPS if parts.scheme == "https" else _PinnedHTTP
+    connection = kind(host, str(address), port=port, timeout=webhooks.TIMEOUT_SECONDS)
+    target = (parts.path or "/") + (f"?{parts.query}" if parts.query else "")
     try:
-        with _opener.open(request, timeout=webhooks.TIMEOUT_SECONDS) as answer:
-            return None if 200 <= answer.status < 300 else f"HTTP {answer.status}"
-    except urllib.error.HTTPError as exc:
-        return f"HTTP {exc.code}"
-    except (OSError, ValueError) as exc:
+        connection.request("POST", target, body=body,
+                           headers={"Content-Type": "application/json", **headers})
+        status = connection.getresponse().status
+        return None if 200 <= status < 300 else f"HTTP {status}"
+    except (OSError, http.client.HTTPException, ValueError) as exc:
         return str(exc) or type(exc).__name__
+    finally:
+        connection.close()
 
 
 class WebhookSender:
@@ -70,11 +92,25 @@ class WebhookSender:
         while not self._stop.is_set():
             try:
                 now = webhooks.now()
-                for item in self._claim(keys=[WEBHOOKS], args=[now, now + webhooks.IN_FLIGHT_SECONDS]):
-                    self.deliver(item)
+                claimed = self._claim(keys=[WEBHOOKS], args=[now, now + webhooks.IN_FLIGHT_SECONDS])
             except redis.RedisError as exc:
                 log.warning("webhooks: redis unavailable: %s", exc)
+                claimed = []
+            for item in claimed:
+                self._deliver_safely(item)
             self._stop.wait(self.interval)
+
+    def _deliver_safely(self, item: str) -> None:
+        """One delivery, whatever it raises: logged and settled (given up), never the thread's
+        end, so no URL, answer or bug stops the deliveries after it."""
+        try:
+            self.deliver(item)
+        except Exception as exc:   # noqa: BLE001 - the loop must outlive any one delivery
+            log.exception("webhook delivery %s failed: %s", item, exc)
+            try:
+                self.store.redis.zrem(WEBHOOKS, item)   # not tried again: it would fail the same way
+            except redis.RedisError:
+                pass   # claimed until IN_FLIGHT_SECONDS: tried again then
 
     def deliver(self, item: str) -> None:
         """One try of a claimed delivery; settles it (done, queued again, or given up)."""
@@ -87,8 +123,7 @@ class WebhookSender:
             headers = {"X-MPM-Signature": webhooks.signature(body, self.settings.webhook_secret or ""),
                        "X-MPM-Event": f"{kind}.finished", "X-MPM-Delivery": f"{kind}-{ident}-{tries}"}
             try:
-                webhooks.check_url(url, self.settings)
-                failure = post(url, body, headers)
+                failure = post(url, body, headers, self.settings)
             except webhooks.WebhookUrlError as exc:
                 failure, tries = f"not allowed any more: {exc}", webhooks.MAX_TRIES
         pipe = self.store.redis.pipeline()
