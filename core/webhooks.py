@@ -110,12 +110,14 @@ def checked_target(url: str, settings: Settings, resolve: bool = True) -> tuple[
     never the service's own Redis. The delivery connects to the address returned, so the
     name is not resolved a second time (DNS rebinding: a name that answered an allowed
     address to the check and another to the connection)."""
-    if not settings.webhook_secret:
-        raise WebhookUrlError("webhooks are off on this service (MPM_WEBHOOK_SECRET is not set)")
-    bad = _FORBIDDEN.search(url)
+    bad = _FORBIDDEN.search(url)   # malformed whether or not webhooks are on: said first
     if bad:
         raise WebhookUrlError(f"must not contain control characters or spaces (U+{ord(bad.group()):04X} at "
                               f"position {bad.start()})")
+    if not url.lower().startswith(("http://", "https://")):
+        raise WebhookUrlError("must be an http:// or https:// URL with a host")
+    if not settings.webhook_secret:
+        raise WebhookUrlError("webhooks are off on this service (MPM_WEBHOOK_SECRET is not set)")
     try:
         parts = urlsplit(url)
         port = parts.port or (443 if parts.scheme == "https" else 80)

@@ -71,21 +71,41 @@ def admit(store: JobStore, jobs: dict[str, dict[str, Any]], quota: OwnerQuota, s
     refused = store.admit_all(jobs, settings.max_concurrent_jobs, quota, sweep)
     if refused is None:
         return
-    count = "" if len(jobs) == 1 else f" ({len(jobs)} jobs asked for)"
+    if refused == "owner_daily":
+        count = "" if len(jobs) == 1 else f" ({len(jobs)} jobs asked for)"
+        maximum = settings.quota_particle_steps_per_day
+        used = store.usage_today(quota.owner or "")
+        message = (f"{quota.cost:.3g} particle-steps{count} would take you over today's quota "
+                   f"of {maximum:.3g} ({used:.3g} used); it resets at 00:00 UTC")
+        raise _too_many("MPM_QUOTA_PARTICLE_STEPS_PER_DAY", maximum, _seconds_to_midnight(), message)
+    raise _count_refusal(refused, len(jobs), settings)
+
+
+def check_count(jobs: int, settings: ApiSettings) -> None:
+    """429 at once when `jobs` together (a sweep's) are more than a limit on jobs at once
+    allows even with none queued: decided from the count before any of them is validated
+    (validating a thousand scenes to refuse them all takes seconds)."""
+    for refused, maximum in (("max_active", settings.max_concurrent_jobs),
+                             ("owner_active", settings.quota_active_jobs),
+                             ("owner_queued", settings.quota_queued_jobs)):
+        if jobs > maximum:
+            raise _count_refusal(refused, jobs, settings)
+
+
+def _count_refusal(refused: str, jobs: int, settings: ApiSettings) -> ApiError:
+    count = "" if jobs == 1 else f" ({jobs} jobs asked for)"
     if refused == "max_active":
         limit, maximum, retry = "MPM_MAX_CONCURRENT_JOBS", settings.max_concurrent_jobs, 5
         message = f"the service takes {maximum} jobs queued or running at most{count}"
     elif refused == "owner_active":
         limit, maximum, retry = "MPM_QUOTA_ACTIVE_JOBS", settings.quota_active_jobs, RETRY_AFTER_JOBS
         message = f"you may have {maximum} jobs queued or running at most{count}"
-    elif refused == "owner_queued":
+    else:
         limit, maximum, retry = "MPM_QUOTA_QUEUED_JOBS", settings.quota_queued_jobs, RETRY_AFTER_JOBS
         message = f"you may have {maximum} jobs waiting in the queue at most{count}"
-    else:
-        limit, maximum, retry = ("MPM_QUOTA_PARTICLE_STEPS_PER_DAY", settings.quota_particle_steps_per_day,
-                                 _seconds_to_midnight())
-        used = store.usage_today(quota.owner or "")
-        message = (f"{quota.cost:.3g} particle-steps{count} would take you over today's quota "
-                   f"of {maximum:.3g} ({used:.3g} used); it resets at 00:00 UTC")
-    raise ApiError(429, "too_many_jobs", message, {"limit": limit, "max": maximum},
-                   headers={"Retry-After": str(retry)})
+    return _too_many(limit, maximum, retry, message)
+
+
+def _too_many(limit: str, maximum: float, retry: int, message: str) -> ApiError:
+    return ApiError(429, "too_many_jobs", message, {"limit": limit, "max": maximum},
+                    headers={"Retry-After": str(retry)})

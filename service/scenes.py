@@ -12,7 +12,7 @@ from pydantic_core import PydanticCustomError
 from solver import capabilities
 from solver.examples import ExampleNotFound, list_examples, load_example
 from solver.scene import Limits, Scene, SceneError, load_scene
-from solver.summary import summarize
+from solver.summary import empty_bodies, summarize
 
 from service.auth import caller
 from service.errors import ApiError, documented, validation_error
@@ -22,34 +22,47 @@ from service.state import Services, services
 router = APIRouter(tags=["scenes"], dependencies=[Depends(caller)])
 
 
-# The setting behind each limit problem of solver.scene (by its path).
-_LIMIT_SETTINGS = {"bodies": "MPM_MAX_PARTICLES", "grid": "MPM_MAX_GRID_NODES", "time": "MPM_MAX_STEPS"}
-
-
 def check_scene(document: dict[str, Any], settings: ApiSettings) -> tuple[str, dict[str, Any]]:
     """The validated scene as JSON text, and its summary; 422 with every error.
 
-    The limits (MPM_MAX_PARTICLES, ...) are checked on counts computed from the
-    scene, before anything is allocated; their errors name the setting."""
+    The limits (MPM_MAX_PARTICLES, MPM_MAX_MEMORY_BYTES, ...) are checked on counts
+    computed from the scene, before anything is allocated; their errors name the setting.
+    A body that seeds no particle is refused by name (the run would have nothing to move)."""
     try:
         scene = load_scene(document, stability=False)
     except SceneError as exc:
         raise validation_error(exc.errors, "the scene is not valid") from None
+    except ArithmeticError as exc:   # a rule's arithmetic overflowed on an absurd value: never a 500
+        raise validation_error([_out_of_range(exc)], "the scene is not valid") from None
     limits = Limits(max_particles=settings.max_particles, max_grid_nodes=settings.max_grid_nodes,
-                    max_steps=settings.max_steps)
+                    max_steps=settings.max_steps, max_memory_bytes=settings.max_memory_bytes)
     try:
         load_scene(scene, limits=limits)   # the limits, then (within them) the time step's stability
+        summary = summarize(scene).model_dump(mode="json")
     except SceneError as exc:
-        details = []
-        for error in exc.errors:
-            setting = _LIMIT_SETTINGS.get(error["path"])
-            message = f"{error['message']} ({setting})" if setting else error["message"]
-            details.append({**error, "message": message, "limit": setting})
+        details = [_with_setting(error) for error in exc.errors]
         over = any(detail["limit"] for detail in details)
         raise validation_error(details, "the scene is over the service's limits" if over
                                else "the scene is not valid") from None
-    summary = summarize(scene).model_dump(mode="json")
+    except ArithmeticError as exc:
+        raise validation_error([_out_of_range(exc)], "the scene is not valid") from None
+    empty = empty_bodies(scene, summary["particles_per_body"])
+    if empty:
+        raise validation_error([{"path": path, "message": message} for path, message in empty],
+                               "the scene is not valid")
     return scene.model_dump_json(), summary
+
+
+def _with_setting(error: dict[str, Any]) -> dict[str, Any]:
+    """A limit error names its setting (max_particles -> MPM_MAX_PARTICLES); others get limit None."""
+    setting = f"MPM_{error['limit'].upper()}" if error.get("limit") else None
+    message = f"{error['message']} ({setting})" if setting else error["message"]
+    return {**error, "message": message, "limit": setting}
+
+
+def _out_of_range(exc: ArithmeticError) -> dict[str, str]:
+    return {"path": "", "message": f"a number of the scene is out of the range of double precision arithmetic "
+                                   f"({type(exc).__name__}: {exc}); use values of sensible magnitude"}
 
 
 class WrapsScene(BaseModel):

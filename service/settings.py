@@ -13,6 +13,14 @@ from pydantic import Field
 from core.settings import Settings
 
 
+def default_memory_limit() -> int:
+    """Half the physical memory: a job must leave room for the API, Redis and the other jobs."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
+    except (ValueError, OSError, AttributeError):   # not POSIX: a conservative 8 GiB
+        return 8 * 2**30
+
+
 class ApiSettings(Settings):
     """The shared settings and the API's, each from the environment variable `MPM_<NAME>`."""
 
@@ -23,6 +31,10 @@ class ApiSettings(Settings):
     max_particles: int = Field(2_000_000, gt=0)
     max_grid_nodes: int = Field(4_000_000, gt=0)
     max_steps: int = Field(10_000_000, gt=0)
+    max_memory_bytes: int = Field(default_factory=lambda: default_memory_limit(), gt=0,
+                                  description="the solver memory a scene may need (particles, grid, frames, "
+                                              "bodies, series; solver/summary.py); default: half this "
+                                              "machine's memory")
     max_body_bytes: int = Field(1_000_000, gt=0, description="largest accepted request body")
     max_concurrent_jobs: int = Field(1000, gt=0, description="queued + running jobs; more answer 429")
     max_sweep_jobs: int = Field(1000, gt=0, description="jobs (combinations) one sweep may make")

@@ -12,6 +12,7 @@ from pydantic import ConfigDict, Field
 
 from core import sweeps
 from core.models import ACTIVE, FINISHED, SweepMode, SweepRecord, now_iso
+from service import quotas
 from service.auth import caller, owns
 from service.errors import ApiError, documented, owned_resource, validation_error
 from service.jobs import NewJob, checked_callback, new_job_from, remove_files, store_and_enqueue
@@ -117,6 +118,7 @@ def submit_sweep(body: SweepRequest, svc: Services = Depends(services),
     """One job per combination; all are validated and admitted together, or none."""
     callback_url = checked_callback(body.callback_url, svc.settings)
     combos = _checked_parameters(body, svc.settings.max_sweep_jobs)
+    quotas.check_count(len(combos), svc.settings)   # before validating a scene per combination
     sweep_id = str(uuid.uuid4())
     jobs = _jobs_of(body, combos, sweep_id, owner, svc)
     record = SweepRecord(id=sweep_id, name=body.name or body.scene.get("name"), owner=owner,

@@ -4,6 +4,7 @@ service is healthy and working afterwards."""
 from __future__ import annotations
 
 import json
+import math
 import time
 
 import pytest
@@ -25,6 +26,14 @@ def _velocity(expression: str):
 
 def _nested(depth: int) -> bytes:
     return b'{"scene": ' + b"[" * depth + b"]" * depth + b"}"
+
+
+def _star_body(scene: dict) -> None:
+    # 5000 spikes from near the centre to the rim: 25 million pairs of edges to check (36 s before)
+    n = 10_000
+    vertices = [[round((0.2 if i % 2 == 0 else 0.002) * math.cos(2 * math.pi * i / n) - 0.3, 6),
+                 round((0.2 if i % 2 == 0 else 0.002) * math.sin(2 * math.pi * i / n) - 0.3, 6)] for i in range(n)]
+    scene["bodies"][0]["geometry"] = {"type": "polygon", "vertices": vertices}
 
 
 # A 1 m cube of 1 cm cells (10^6 nodes, within MPM_MAX_GRID_NODES), filled with 100^3 particles a cell
@@ -85,6 +94,28 @@ HOSTILE = [
      _scene(lambda s: s["bodies"][0].update(material="st\u202eeel\u0000")), 422, "bodies[0].material", "st"),
     ("not JSON at all", "POST", "/v1/jobs", b"\xff\xfe\x00binary", 422, "", "JSON"),
     ("a list for the request", "POST", "/v1/jobs", [1, 2, 3], 422, "", ""),
+    # issue 49
+    ("a billion frames", "POST", "/v1/jobs",
+     {"scene": _scene(lambda s: s.update(output={"frames": 10**9}))}, 422, "output.frames", "time steps"),
+    ("a grid from -1e308 to 1e308", "POST", "/v1/jobs",
+     {"scene": _scene(lambda s: s["grid"].update(lower=[-1e308, -1e308], upper=[1e308, 1e308]))}, 422, "grid",
+     "not a finite number of cells"),
+    ("cells of 1e300", "POST", "/v1/scenes/validate", _scene(lambda s: s["grid"].update(cell_size=1e300)), 422,
+     "bodies[0]", "seeds no particle"),
+    ("end / dt of 1e616", "POST", "/v1/scenes/validate", _scene(lambda s: s["time"].update(end=1e308, dt=1e-308)),
+     422, "time.dt", "max_steps"),
+    ("a body smaller than its particle spacing", "POST", "/v1/jobs",
+     {"scene": _scene(lambda s: s["bodies"][1]["geometry"].update(radius=1e-4))}, 422, "bodies[1]",
+     "'disk2' seeds no particle"),
+    ("a 10,000-vertex star polygon", "POST", "/v1/scenes/validate", _scene(_star_body), 422,
+     "bodies[0].geometry.vertices", "too complex"),
+    ("a 5000-digit integer", "POST", "/v1/scenes/validate",
+     b'{"version": 1,\n "dimension": ' + b"7" * 5000 + b"}", 422, "", "line 2, column 15"),
+    ("a callback URL with CR/LF", "POST", "/v1/jobs",
+     {"scene": two_disks(), "callback_url": "http://127.0.0.1:9911/\r\nX-Injected: 1"}, 422, "callback_url",
+     "control characters"),
+    ("a callback URL of another scheme", "POST", "/v1/jobs",
+     {"scene": two_disks(), "callback_url": "gopher://127.0.0.1:9911/"}, 422, "callback_url", "http://"),
     ("path-like job id", "GET", "/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", None, 404, None, ""),
     ("dot-dot job id", "DELETE", "/v1/jobs/%2E%2E", None, 404, None, ""),
     ("job id with a NUL", "GET", "/v1/jobs/%00", None, 404, None, ""),
@@ -162,6 +193,31 @@ def test_a_huge_scene_is_refused_within_a_second(alice, name, path, body, fields
     assert all(d["limit"] in ("MPM_MAX_GRID_NODES", "MPM_MAX_PARTICLES") for d in details), details
     assert elapsed < 1.0, f"{name} took {elapsed:.2f} s"
     assert alice.get("/v1/jobs").json()["jobs"] == before  # nothing queued
+
+
+@pytest.mark.parametrize("content_type,body", [
+    ("text/plain", json.dumps({"scene": two_disks()}).encode()),
+    ("application/x-www-form-urlencoded", b"scene=%7B%7D"),
+    ("multipart/form-data; boundary=x", b'--x\r\nContent-Disposition: form-data; name="scene"\r\n\r\n{}\r\n--x--'),
+    (None, json.dumps({"scene": two_disks()}).encode()),
+])
+def test_a_body_that_is_not_json_by_its_type_is_a_415(alice, content_type, body):
+    headers = {"content-type": content_type} if content_type else {}
+    answer = alice.post("/v1/jobs", content=body, headers=headers)
+    assert answer.status_code == 415, answer.text
+    assert "send application/json" in answer.json()["error"]["message"]
+
+
+def test_a_sweep_over_the_quota_is_refused_before_its_scenes_are_validated(alice):
+    before = alice.get("/v1/jobs").json()["jobs"]
+    started = time.monotonic()
+    answer = alice.post("/v1/sweeps", json={"scene": two_disks(), "parameters": {
+        "/materials/rubber/youngs_modulus": [1000.0 + i for i in range(1000)]}})
+    elapsed = time.monotonic() - started
+    assert answer.status_code == 429, answer.text
+    assert answer.json()["error"]["details"]["limit"] in ("MPM_QUOTA_ACTIVE_JOBS", "MPM_QUOTA_QUEUED_JOBS")
+    assert elapsed < 1.0, f"took {elapsed:.2f} s"   # 2.5 s before: every combination was validated first
+    assert alice.get("/v1/jobs").json()["jobs"] == before
 
 
 def test_unicode_names_are_kept_as_they_are(alice):
