@@ -30,6 +30,13 @@ class JobFiles:
     def __init__(self, jobs_dir: Path, job_id: str):
         self.dir = Path(jobs_dir) / parse_job_id(job_id)
 
+    def redact(self, text: str) -> str:
+        """`text` (a log line, an error) without the server's paths: the job's folder becomes
+        `<job>` and the data folder above it `<data>` (clients see no absolute path)."""
+        text = text.replace(str(self.dir.resolve()), "<job>").replace(str(self.dir), "<job>")
+        data = self.dir.parent.parent
+        return text.replace(str(data.resolve()), "<data>").replace(str(data), "<data>")
+
     @property
     def scene(self) -> Path:
         return self.dir / "scene.json"

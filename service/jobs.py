@@ -328,13 +328,14 @@ def get_log(job_id: str, since: int = Query(0, ge=0, le=10**9), limit: int = Que
     job_id = _job_id(job_id)
     status = _record(svc, job_id, owner)["status"]
     lines: list[str] = []
+    files = JobFiles(svc.settings.jobs_dir, job_id)
     try:
-        with open(JobFiles(svc.settings.jobs_dir, job_id).log, encoding="utf-8", errors="replace") as log_file:
+        with open(files.log, encoding="utf-8", errors="replace") as log_file:
             for number, line in enumerate(log_file):
                 if number >= since + limit or not line.endswith("\n"):  # a line being written waits
                     break
                 if number >= since:
-                    lines.append(line)
+                    lines.append(files.redact(line))   # the dashboard and `mpm log` show it: no server paths
     except FileNotFoundError:  # not started yet
         pass
     return Response("".join(lines), media_type="text/plain; charset=utf-8",

@@ -63,8 +63,11 @@ def _read_lines(stream, lines: queue.Queue, log) -> None:
             item = None
         if isinstance(item, dict):
             lines.put(item)
-            if item.get("event") == "done":  # the run's last word goes to its log too (GET .../log)
-                log.write(raw)
+            if item.get("event") == "done":  # the run's last word goes to its log too (GET .../log),
+                # with the result's name, not the server's path to it
+                shown = {**item, **{key: Path(item[key]).name for key in ("result_path",) if key in item}}
+                shown.pop("out_dir", None)
+                log.write(json.dumps(shown) + "\n")
                 log.flush()
         elif raw.strip():
             log.write(raw)

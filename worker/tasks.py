@@ -235,8 +235,8 @@ def _finish(store: JobStore, job_id: str, files: JobFiles, outcome: Outcome, set
     else:
         status = "failed"
         early = f"the run ended early ({done['reason']})" if done.get("reason") else None
-        error = (done.get("message") or early or outcome.log_tail
-                 or f"the solver exited with code {outcome.returncode}")
+        error = files.redact(done.get("message") or early or outcome.log_tail
+                             or f"the solver exited with code {outcome.returncode}")
     if "steps" in done:
         final.update(step=done["steps"], sim_time=done.get("time"))
     _retry_redis(lambda: store.transition(job_id, ["running"], status, error=error, eta_seconds=None, **final))

@@ -132,6 +132,7 @@ def test_the_log_is_read_from_a_line_on(api, stack):
     assert whole.status_code == 200 and whole.headers["content-type"].startswith("text/plain")
     on_disk = (stack.data_dir / "jobs" / job["id"] / "solver.log").read_text()
     assert whole.text == on_disk and on_disk.count("\n") >= 1
+    assert str(stack.data_dir) not in whole.text and '"result_path": "result.h5"' in whole.text   # issue 49
     assert int(whole.headers["x-mpm-next-line"]) == on_disk.count("\n")
     assert whole.headers["x-mpm-job-status"] == "succeeded"
     rest = api.get(f"/v1/jobs/{job['id']}/log", params={"since": 1})
