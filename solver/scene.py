@@ -290,16 +290,17 @@ class PolygonGeometry(_Geometry):
     def _simple(cls, vertices: list[list[float]], info: ValidationInfo) -> list[list[float]]:
         # the scene's polygons together, counted as they are validated: a union of thousands
         # is refused at the one that passes the cap, before its own check runs
-        seen = (info.context or {}).get("polygon_vertices")   # [count, refused already]
+        seen = (info.context or {}).get("polygons")   # [polygons, vertices, refused already]
         if seen is not None:
-            seen[0] += len(vertices)
-            if seen[1]:
-                return vertices   # the scene is refused at the first polygon past the cap: said once
-            if seen[0] > geometry_shapes.MAX_POLYGON_VERTICES:
-                seen[1] = True
-                raise scene_error(f"the scene's polygons have {seen[0]} vertices so far, more than "
-                                  f"{geometry_shapes.MAX_POLYGON_VERTICES} together (each inside test loops "
-                                  "over every edge)")
+            seen[0] += 1
+            seen[1] += len(vertices)
+            if seen[2]:
+                return vertices   # the scene is refused at the first polygon past a cap: said once
+            if seen[0] > geometry_shapes.MAX_POLYGONS or seen[1] > geometry_shapes.MAX_POLYGON_VERTICES:
+                seen[2] = True
+                raise scene_error(f"the scene has {seen[0]} polygons of {seen[1]} vertices so far, more than "
+                                  f"{geometry_shapes.MAX_POLYGONS} polygons or {geometry_shapes.MAX_POLYGON_VERTICES}"
+                                  " vertices together (each is checked, and each inside test loops over every edge)")
         try:
             crossing = geometry_shapes.first_crossing(np.array(vertices, dtype=np.float64))
         except geometry_shapes.TooComplex as exc:
@@ -1264,7 +1265,7 @@ def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None
         if files is None and _is_path(source):
             files = Path(source).resolve().parent
         try:
-            scene = Scene.model_validate(data, context={"files": files, "polygon_vertices": [0, False]})
+            scene = Scene.model_validate(data, context={"files": files, "polygons": [0, 0, False]})
         except ValidationError as exc:
             raise SceneError(_format_errors(exc, data)) from None
     over = _limit_problems(scene, limits) if limits is not None else []
