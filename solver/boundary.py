@@ -71,7 +71,7 @@ class Constraints:
                     conditions.append(np.full(sel.size, number))
                     if isinstance(component, str):
                         values.append(np.zeros(sel.size))
-                        expressions.append(compile_expression(component, ("t",)))
+                        expressions.append(compile_expression(component, ("t",), scene.expressions))
                     else:
                         values.append(np.full(sel.size, float(component)))
                         expressions.append(None)

@@ -157,7 +157,7 @@ def particle_step_seconds(model: CostModel, scene, backend: str) -> float:
 
 def _expression_seconds(model: CostModel, scene) -> float:
     """Per particle and step: the body_force expressions, evaluated with numpy in the step."""
-    operations = sum(compile_expression(c, BODY_FORCE_VARIABLES).operations
+    operations = sum(compile_expression(c, BODY_FORCE_VARIABLES, scene.expressions).operations
                      for c in scene.body_force or () if isinstance(c, str))
     return model.expression_seconds * operations
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +31,13 @@ from solver.errors import SolverError
 
 MAX_LENGTH = 1000
 MAX_DEPTH = 50
+# Named sub-expressions (a scene's `expressions`): how many, and how long a chain of
+# names may refer one to the next. Each one is at most MAX_LENGTH characters and is
+# evaluated once per evaluation of the expression that uses it, so these two bound the
+# work an evaluation can cost (the names are not written out into one long text).
+MAX_DEFINITIONS = 200
+MAX_DEFINITION_CHAIN = 32
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z_0-9]*$")
 
 CONSTANTS = {"pi": math.pi, "e": math.e}
 
@@ -319,10 +326,13 @@ def _condition_misplaced(start: _Token) -> ExpressionError:
 class Expression:
     """A compiled expression. ``evaluate(**values)`` returns float64 values."""
 
-    def __init__(self, text: str, program: list[_Instruction], variables_used: frozenset[str]):
+    def __init__(self, text: str, program: list[_Instruction], variables_used: frozenset[str],
+                 definitions: tuple[tuple[str, "Expression"], ...] = ()):
         self.text = text
         self._program = program
-        self.variables_used = variables_used
+        self.variables_used = variables_used    # the plain variables, through the named expressions too
+        # the named expressions it needs, each after those it needs: evaluated once, in order
+        self._definitions = definitions
 
     def evaluate(self, **values: float | np.ndarray) -> np.ndarray:
         """Evaluate element-wise. Every value given (used or not) takes part in the
@@ -334,32 +344,41 @@ class Expression:
             raise ExpressionError(f"no value given for {', '.join(sorted(missing))} in {self.text!r}")
         arrays = {name: np.asarray(value, dtype=np.float64) for name, value in values.items()}
         shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
-        stack: list = []
         with np.errstate(all="ignore"):
-            for kind, payload, count in self._program:
-                if kind == "const":
-                    stack.append(payload)
-                elif kind == "var":
-                    stack.append(arrays[payload])
-                else:
-                    arguments = stack[len(stack) - count:]
-                    del stack[len(stack) - count:]
-                    stack.append(payload(*arguments))
-        (result,) = stack
+            for name, definition in self._definitions:
+                arrays[name] = definition._run(arrays)
+            result = self._run(arrays)
         return np.array(np.broadcast_to(result, shape), dtype=np.float64)
+
+    def _run(self, arrays: dict) -> np.ndarray | float:
+        stack: list = []
+        for kind, payload, count in self._program:
+            if kind == "const":
+                stack.append(payload)
+            elif kind == "var":
+                stack.append(arrays[payload])
+            else:
+                arguments = stack[len(stack) - count:]
+                del stack[len(stack) - count:]
+                stack.append(payload(*arguments))
+        (result,) = stack
+        return result
 
     @property
     def operations(self) -> int:
-        """Instructions of the program (constants, variables, operations): what one evaluation
-        costs per value, for the run-time estimate (solver/cost.py)."""
-        return len(self._program)
+        """Instructions of the program (constants, variables, operations), the named expressions'
+        included: what one evaluation costs per value, for the run-time estimate (solver/cost.py)."""
+        return len(self._program) + sum(len(d._program) for _, d in self._definitions)
 
     def __repr__(self) -> str:
         return f"Expression({self.text!r})"
 
 
-def compile_expression(text: str, variables: Iterable[str]) -> Expression:
-    """Parse ``text`` allowing only the given variable names; raise ExpressionError."""
+def compile_expression(text: str, variables: Iterable[str],
+                       definitions: Mapping[str, str] | None = None) -> Expression:
+    """Parse ``text`` allowing only the given variable names and the names of ``definitions``
+    (named sub-expressions over the same variables, which may use each other without a
+    cycle); raise ExpressionError."""
     if not isinstance(text, str):
         raise ExpressionError("an expression must be a string")
     if len(text) > MAX_LENGTH:
@@ -368,6 +387,73 @@ def compile_expression(text: str, variables: Iterable[str]) -> Expression:
     clashes = allowed & (CONSTANTS.keys() | FUNCTIONS.keys())
     if clashes:
         raise ValueError(f"variable names clash with built-in names: {sorted(clashes)}")
+    if not definitions:
+        return _parse(text, allowed)
+    names = frozenset(definitions) - allowed
+    expression = _parse(text, allowed | names)
+    order: dict[str, Expression] = {}
+    for name in sorted(expression.variables_used & names):
+        _resolve(name, definitions, allowed, names, order, ())
+    used = (expression.variables_used - names).union(*(d.variables_used for d in order.values()))
+    return Expression(text, expression._program, frozenset(used), tuple(order.items()))
+
+
+def _parse(text: str, allowed: frozenset[str]) -> Expression:
     parser = _Parser(text, allowed)
     parser.parse()
     return Expression(text, parser.program, frozenset(parser.used))
+
+
+def _resolve(name: str, definitions: Mapping[str, str], allowed: frozenset[str], names: frozenset[str],
+             order: dict[str, Expression], chain: tuple[str, ...]) -> None:
+    """Compile the named expression ``name`` after those it uses (depth first), into ``order``;
+    its program reads the names it uses as variables, evaluated before it."""
+    if name in order:
+        return
+    if name in chain:
+        cycle = " -> ".join(chain[chain.index(name):] + (name,))
+        raise ExpressionError(f"the named expressions refer to each other in a cycle: {cycle}")
+    if len(chain) >= MAX_DEFINITION_CHAIN:
+        raise ExpressionError(f"named expressions nested more than {MAX_DEFINITION_CHAIN} deep: "
+                              f"{' -> '.join(chain[:3])} -> ... -> {name}")
+    text = definitions[name]
+    try:
+        if not isinstance(text, str):
+            raise ExpressionError("an expression must be a string")
+        if len(text) > MAX_LENGTH:
+            raise ExpressionError(f"the expression is longer than {MAX_LENGTH} characters")
+        expression = _parse(text, allowed | names)
+    except ExpressionError as exc:
+        raise ExpressionError(f"in the named expression {name!r}: {exc}") from None
+    for used in sorted(expression.variables_used & names):
+        _resolve(used, definitions, allowed, names, order, chain + (name,))
+    plain = (expression.variables_used - names).union(*(order[u].variables_used
+                                                        for u in expression.variables_used & names))
+    order[name] = Expression(text, expression._program, frozenset(plain))
+
+
+def definition_problems(definitions: Mapping[str, str], variables: Iterable[str]) -> list[tuple[str, str]]:
+    """Every problem of a map of named expressions, as (name, message): too many, a name that
+    is not an identifier or that is already a variable, constant or function, a text that
+    does not compile over ``variables`` and the other names, a cycle, a chain too deep."""
+    if len(definitions) > MAX_DEFINITIONS:
+        return [("", f"at most {MAX_DEFINITIONS} named expressions, got {len(definitions)}")]
+    allowed = frozenset(variables)
+    problems = []
+    for name in definitions:
+        if not _NAME.match(name):
+            problems.append((name, "a name is letters, digits and _, starting with a letter or _"))
+        elif name in allowed or name in CONSTANTS or name in FUNCTIONS:
+            kind = "variable" if name in allowed else "constant" if name in CONSTANTS else "function"
+            problems.append((name, f"{name!r} is already a {kind} of expressions"))
+    if problems:
+        return problems
+    names = frozenset(definitions)
+    order: dict[str, Expression] = {}
+    for name in definitions:
+        try:
+            _resolve(name, definitions, allowed, names, order, ())
+        except ExpressionError as exc:
+            problems.append((name, str(exc)))
+            break   # one failure leaves `order` part-filled: the others would repeat it
+    return problems

@@ -31,7 +31,7 @@ class BodyLoads:
         self.expressions = []
         if scene.body_force is not None:
             self.expressions = [
-                compile_expression(c, variables) if isinstance(c, str) else float(c or 0.0)
+                compile_expression(c, variables, scene.expressions) if isinstance(c, str) else float(c or 0.0)
                 for c in scene.body_force
             ]
         self.needs_reference = any(
@@ -76,7 +76,7 @@ class AppliedLoads:
 
     def __init__(self, scene, particles):
         self.dimension = scene.dimension
-        self.vectors = [[compile_expression(c, ("t",)) if isinstance(c, str) else float(c) for c in load.vector]
+        self.vectors = [[compile_expression(c, ("t",), scene.expressions) if isinstance(c, str) else float(c) for c in load.vector]
                         for load in scene.loads]
         share = particles.require(self.SHARE, (len(scene.loads),))
         for i, load in enumerate(scene.loads):

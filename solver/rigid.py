@@ -119,7 +119,7 @@ class RigidBodies:
             if not self.is_rigid[b]:
                 continue
             components = body.velocity if body.velocity is not None else [0.0] * dim
-            self._components[b] = [compile_expression(c, ("t",)) if isinstance(c, str) else c for c in components]
+            self._components[b] = [compile_expression(c, ("t",), scene.expressions) if isinstance(c, str) else c for c in components]
             self.imposed[b] = [c is not None for c in components]
         self.impulse = np.zeros((n_bodies, dim))
         self._elapsed = 0.0

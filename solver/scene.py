@@ -45,7 +45,9 @@ from solver import mesh as meshes
 from solver import points as point_sets
 from solver.boundary import face_material
 from solver.errors import SolverError
-from solver.expressions import ExpressionError, compile_expression
+from contextvars import ContextVar
+
+from solver.expressions import ExpressionError, compile_expression, definition_problems
 from solver.materials.ideal_gas import IdealGas
 from solver.materials.johnson_cook import JohnsonCook
 from solver.materials.rigid import Rigid
@@ -72,6 +74,9 @@ SPACE_VARIABLES = ("x", "y", "z")
 TIME_VARIABLES = ("t",)
 BODY_FORCE_VARIABLES = ("x", "y", "z", "X", "Y", "Z", "t")
 _AXIS_OF_VARIABLE = {"x": 0, "y": 1, "z": 2, "X": 0, "Y": 1, "Z": 2}
+# The scene's named expressions (`expressions`) while a scene is being validated: the
+# fields read before the scene is whole (a body force naming `bx`) compile against them.
+_DEFINITIONS: ContextVar[dict[str, str] | None] = ContextVar("scene_expressions", default=None)
 
 # Every output field name of the contract; the solver writes those listed in
 # capabilities.OUTPUT_FIELDS (id, body and mass are always written).
@@ -108,7 +113,7 @@ def _number_or_expression(variables: tuple[str, ...]):
     def validate(value: Any) -> float | str:
         if isinstance(value, str):
             try:
-                compile_expression(value, variables)
+                compile_expression(value, variables, _DEFINITIONS.get())
             except ExpressionError as exc:
                 shown = value if len(value) <= 80 else value[:60] + "..."  # not a huge input echoed
                 raise scene_error(f"invalid expression {shown!r}: {exc}") from None
@@ -769,6 +774,33 @@ class Scene(SceneModel):
     output: Output = Field(default_factory=Output)
     parallel: Parallel = Field(default_factory=Parallel)
     units: Units | None = None  # labels only (solver/units.py): plots show them, nothing is converted
+    # named sub-expressions that every expression of the scene may use by name (third wave)
+    expressions: dict[str, str] = Field(default_factory=dict)
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _with_definitions(cls, data: Any, handler):
+        """The named expressions are known while the fields that use them are read."""
+        given = data.get("expressions") if isinstance(data, dict) else None
+        definitions = ({k: v for k, v in given.items() if isinstance(k, str) and isinstance(v, str)}
+                       if isinstance(given, dict) else None)
+        token = _DEFINITIONS.set(definitions or None)
+        try:
+            return handler(data)
+        finally:
+            _DEFINITIONS.reset(token)
+
+    @field_validator("expressions")
+    @classmethod
+    def _definitions_sound(cls, value: dict[str, str]) -> dict[str, str]:
+        problems = definition_problems(value, BODY_FORCE_VARIABLES)
+        if problems:
+            raise problems_at([(name, message) for name, message in problems])
+        return value
+
+    def expression(self, text: str, variables: tuple[str, ...]):
+        """An expression of this scene, compiled with its named expressions."""
+        return compile_expression(text, variables, self.expressions)
 
     @field_validator("axisymmetric")
     @classmethod
@@ -853,7 +885,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     def expressions_ok(path: str, values: list | None, variables: tuple[str, ...]) -> None:
         for i, value in enumerate(values or []):
             if isinstance(value, str):
-                used = compile_expression(value, variables).variables_used
+                used = compile_expression(value, variables, scene.expressions).variables_used
                 for name in sorted(n for n in used if _AXIS_OF_VARIABLE.get(n, -1) >= dim):
                     problems.append((f"{path}[{i}]", f"variable {name!r} does not exist in a {dim}D scene"))
 

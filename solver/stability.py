@@ -82,12 +82,12 @@ def _largest_speed(scene, body) -> float:
     field such as a vortex's grows fast outside its ring, where no particle is."""
     if body.velocity is not None:
         values = {"t": np.linspace(0.0, scene.time.end, _TIME_SAMPLES)}
-        return _largest_norm(body.velocity, TIME_VARIABLES, values)
+        return _largest_norm(body.velocity, TIME_VARIABLES, values, scene.expressions)
     if body.initial_velocity is None:
         return 0.0
     points = _sample_points(body.geometry.shape())
     values = {name: points[:, a] for a, name in enumerate(SPACE_VARIABLES[:points.shape[1]])}
-    return _largest_norm(body.initial_velocity, SPACE_VARIABLES, values)
+    return _largest_norm(body.initial_velocity, SPACE_VARIABLES, values, scene.expressions)
 
 
 def _sample_points(region) -> np.ndarray:
@@ -103,12 +103,13 @@ def _sample_points(region) -> np.ndarray:
     return points[inside] if np.any(inside) else points
 
 
-def _largest_norm(components: list[float | str], variables: tuple[str, ...], values: dict) -> float:
+def _largest_norm(components: list[float | str], variables: tuple[str, ...], values: dict,
+                  definitions: dict | None = None) -> float:
     squares = 0.0
     for component in components:
         if component is None:   # a free axis of a rigid body
             continue
-        value = compile_expression(component, variables).evaluate(**values) if isinstance(component, str) else component
+        value = compile_expression(component, variables, definitions).evaluate(**values) if isinstance(component, str) else component
         squares = squares + np.square(value)
     largest = float(np.max(np.sqrt(squares)))
     return largest if math.isfinite(largest) else 0.0

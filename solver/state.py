@@ -248,7 +248,7 @@ def make_particles(scene) -> tuple[Particles, dict[str, slice]]:
         coords = {names[a]: x[sel, a] for a in range(dim)}
         for a, component in enumerate(b.initial_velocity or []):
             if isinstance(component, str):
-                v[sel, a] = compile_expression(component, names).evaluate(**coords)
+                v[sel, a] = compile_expression(component, names, scene.expressions).evaluate(**coords)
             elif component is not None:
                 v[sel, a] = component
 

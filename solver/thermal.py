@@ -136,9 +136,9 @@ class _NodeValues:
             self.value[sl] = float(expression.evaluate(t=t))
 
 
-def _value(spec):
-    """(number, None) or (0, compiled expression in t)."""
-    return (0.0, compile_expression(spec, ("t",))) if isinstance(spec, str) else (float(spec), None)
+def _value(spec, definitions=None):
+    """(number, None) or (0, compiled expression in t; `definitions`: the scene's named expressions)."""
+    return (0.0, compile_expression(spec, ("t",), definitions)) if isinstance(spec, str) else (float(spec), None)
 
 
 def held_temperatures(scene, grid) -> _NodeValues:
@@ -156,7 +156,7 @@ def held_temperatures(scene, grid) -> _NodeValues:
             inside = np.all((positions >= np.asarray(bc.where.lower) - tol)
                             & (positions <= np.asarray(bc.where.upper) + tol), axis=1)
             sel = np.flatnonzero(inside)
-        number, expression = _value(bc.temperature)
+        number, expression = _value(bc.temperature, scene.expressions)
         nodes.append(sel)
         values.append(np.full(sel.size, number))
         if expression is not None:
@@ -181,7 +181,7 @@ class FaceHeat:
             nodes.append(sel)
             areas.append(_tributary(grid, sel, axis, scene.axisymmetric))
             which.append(np.full(sel.size, c))
-            number, expression = _value(bc.flux) if bc.type == "heat_flux" else (0.0, None)
+            number, expression = _value(bc.flux, scene.expressions) if bc.type == "heat_flux" else (0.0, None)
             if expression is not None:
                 self._flux_expressions.append((c, expression))
             flux.append(number)

@@ -272,7 +272,7 @@ def penalty_time_step(near, depth, size, ring, modulus, damage, stiffness, mass,
 class Tool:
     """One tool: its shape at rest, its velocity components, stiffness and friction."""
 
-    def __init__(self, spec, dim: int, axisymmetric: bool = False):
+    def __init__(self, spec, dim: int, axisymmetric: bool = False, definitions=None):
         self.name = spec.name.replace("/", "_")
         self.kind = KINDS[spec.geometry.type]
         self.stiffness, self.friction = float(spec.stiffness), float(spec.friction)
@@ -286,7 +286,7 @@ class Tool:
         if self.kind == BOX and axisymmetric and shape.lower[0] <= 0.0:
             self.box_lower[0] = -shape.upper[0]
         components = spec.velocity if spec.velocity is not None else [0.0] * dim
-        self.components = [compile_expression(c, ("t",)) if isinstance(c, str) else float(c) for c in components]
+        self.components = [compile_expression(c, ("t",), definitions) if isinstance(c, str) else float(c) for c in components]
 
     def velocity(self, t: float) -> np.ndarray:
         return np.array([c if isinstance(c, float) else float(c.evaluate(t=t)) for c in self.components])
@@ -326,7 +326,7 @@ class Tools:
         dim = scene.dimension
         self.domain = domain
         self.axisymmetric = bool(scene.axisymmetric)
-        self.tools = [Tool(spec, dim, self.axisymmetric) for spec in scene.tools]
+        self.tools = [Tool(spec, dim, self.axisymmetric, scene.expressions) for spec in scene.tools]
         self.displacement = np.zeros((len(self.tools), dim))   # since t = 0; the tools move by it
         self.velocity = np.zeros((len(self.tools), dim))       # at the end of the current step
         self.impulse = np.zeros((len(self.tools), dim))        # sum dt f on the particles since the last row
