@@ -59,9 +59,7 @@ class Constraints:
                     expressions.append(None)
                     conditions.append(np.full(sel.size, number))
             elif bc.type == "velocity":
-                lower = np.asarray(bc.where.lower) - tol
-                upper = np.asarray(bc.where.upper) + tol
-                inside = np.all((positions >= lower) & (positions <= upper), axis=1)
+                inside = _inside(bc.where, positions, tol)
                 sel = np.flatnonzero(inside)
                 for a, component in enumerate(bc.velocity):
                     if component is None:
@@ -151,3 +149,14 @@ class ConditionReactions:
         self.elapsed = 0.0
         return {f"reaction_bc{i}_{'xyz'[a]}": float(force[i, a])
                 for i in range(force.shape[0]) for a in range(force.shape[1])}
+
+
+def _inside(where, positions: np.ndarray, tol: float) -> np.ndarray:
+    """The nodes inside a velocity condition's `where`: a box with its faces (within
+    round-off: nodes on a face belong to it), any other geometry by its own test."""
+    if where.type == "box":
+        lower, upper = np.asarray(where.lower) - tol, np.asarray(where.upper) + tol
+        return np.all((positions >= lower) & (positions <= upper), axis=1)
+    from solver.geometry import from_spec   # (geometry imports nothing of this module's users)
+
+    return np.asarray(from_spec(where).contains(positions), dtype=bool)

@@ -414,15 +414,23 @@ def cmd_import(args: argparse.Namespace) -> int:
         Path(args.output).write_text(text, encoding="utf-8")
     else:
         sys.stdout.write(text)
-    for item in translation.untranslated:
-        print(f"{args.file}:{item.line}: not translated: {item.text}: {item.reason}" if item.text
-              else f"{args.file}:{item.line}: {item.reason}", file=sys.stderr)
+    _print_translation(args.file, translation)
     try:
         load_scene(translation.scene)
     except SceneError as error:
         _print_scene_errors(args.output or "the translated scene", error)
         return EXIT_INVALID
     return EXIT_PARTIAL if translation.untranslated else EXIT_OK
+
+
+def _print_translation(source: str, translation) -> None:
+    """Every line that is not translated, and every note on a translated one, on stderr."""
+    for item in translation.notes:
+        print(f"{source}:{item.line}: note: {item.text}: {item.reason}" if item.text
+              else f"{source}:{item.line}: note: {item.reason}", file=sys.stderr)
+    for item in translation.untranslated:
+        print(f"{source}:{item.line}: not translated: {item.text}: {item.reason}" if item.text
+              else f"{source}:{item.line}: {item.reason}", file=sys.stderr)
 
 
 # -- mpm calibrate -----------------------------------------------------------

@@ -460,11 +460,18 @@ class Body(SceneModel):
     initial_stress: GeostaticStress | None = None   # None: stress-free
 
 
+# where a velocity condition holds: the geometries defined by numbers alone (no files)
+NodeRegion = Annotated[Union[BoxGeometry, SphereGeometry, CylinderGeometry, UnionGeometry, DifferenceGeometry,
+                             IntersectionGeometry], Field(discriminator="type")]
+
+
 class VelocityCondition(SceneModel):
-    """Grid nodes inside ``where`` get the given components; None leaves one free."""
+    """Grid nodes inside ``where`` get the given components; None leaves one free. ``where``
+    is a box (its faces included, within round-off) or another geometry of the nodes' space
+    (a disk, a ring's outside as a difference: an imported Karamelo region)."""
 
     type: Literal["velocity"]
-    where: BoxGeometry
+    where: NodeRegion
     velocity: Annotated[list[TimeValue | None], Field(min_length=1)]
 
     _type_supported = supported("type", "BOUNDARY_CONDITIONS")
@@ -986,8 +993,11 @@ def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:
     for i, condition in enumerate(scene.boundary_conditions):
         path = f"boundary_conditions[{i}]"
         if isinstance(condition, VelocityCondition):
-            length_ok(f"{path}.where.lower", condition.where.lower)
-            length_ok(f"{path}.where.upper", condition.where.upper)
+            if condition.where.type == "box":
+                length_ok(f"{path}.where.lower", condition.where.lower)
+                length_ok(f"{path}.where.upper", condition.where.upper)
+            else:
+                _geometry_problems(f"{path}.where", condition.where, scene.dimension, problems)
             length_ok(f"{path}.velocity", condition.velocity)
         elif isinstance(condition, (WallCondition, AbsorbingCondition)):   # (thermal faces: thermal_problems)
             axis = "xyz".index(condition.face[0])
