@@ -72,8 +72,13 @@ def _load(path: str | dict, processes: int | None = None, threads: int | None = 
 
     # a local command: a checkpoint's scene may read its files too (their names were made absolute)
     files = Path.cwd() if isinstance(path, dict) else Path(path).resolve().parent
+    source = path if isinstance(path, dict) else Path(path)
+    if is_karamelo(path):
+        source = _imported(path)
+        if source is None:
+            return None
     try:
-        scene = load_scene(path if isinstance(path, dict) else Path(path), files=files)
+        scene = load_scene(source, files=files)
         given = {k: v for k, v in (("processes", processes), ("threads", threads)) if v is not None}
         if given:
             data = scene.model_dump(mode="json")
@@ -83,6 +88,25 @@ def _load(path: str | dict, processes: int | None = None, threads: int | None = 
         _print_scene_errors("the checkpoint's scene" if isinstance(path, dict) else path, error)
         return None
     return scene
+
+
+def is_karamelo(path: Any) -> bool:
+    """A Karamelo input file (`.mpm`): run and validate import it on the way."""
+    return isinstance(path, (str, Path)) and str(path).lower().endswith(".mpm")
+
+
+def _imported(path: str | Path) -> dict | None:
+    """The scene of a Karamelo file, its notes and left-out lines on stderr; None after
+    printing why the file cannot be imported."""
+    from solver.karamelo import KarameloError, translate_file
+
+    try:
+        translation = translate_file(path)
+    except (OSError, UnicodeDecodeError, KarameloError) as error:
+        print(f"mpm: {path}: cannot import the Karamelo file: {error}", file=sys.stderr)
+        return None
+    _print_translation(str(path), translation)
+    return translation.scene
 
 
 def human_bytes(count: float) -> str:
@@ -112,7 +136,8 @@ def register_run(subparsers) -> None:
         "run", help="run a scene locally (no server)",
         description="Run a scene here and write result.h5, result.xdmf and preview.png.",
     )
-    parser.add_argument("scene", nargs="?", help="scene file (JSON); with --resume: the checkpoint's by default")
+    parser.add_argument("scene", nargs="?", help="scene file (JSON, or a Karamelo .mpm file, imported on the way); "
+                                                 "with --resume: the checkpoint's by default")
     parser.add_argument("-o", "--output", metavar="DIR", help="output folder (default: out/<scene file name>)")
     parser.add_argument("-n", "--processes", type=_positive_int, metavar="K",
                         help="processes to run on (sets parallel.processes)")
@@ -243,7 +268,7 @@ def register_validate(subparsers) -> None:
         description="Validate a scene; print its particles, grid nodes, steps, memory and run time, "
                     "or every error with its path.",
     )
-    parser.add_argument("scene", help="scene file (JSON)")
+    parser.add_argument("scene", help="scene file (JSON, or a Karamelo .mpm file, imported on the way)")
     parser.set_defaults(func=cmd_validate)
 
 

@@ -154,6 +154,20 @@ def test_submit_reads_a_file_json_text_or_a_pydantic_model(fake, client, tmp_pat
     assert [sent_json(r)["scene"] for r in fake.requests] == [SCENE] * 4
 
 
+def test_submit_imports_a_karamelo_file_and_warns_of_its_lines(fake, client):
+    from mpm_client.scenes import KarameloImportWarning
+    from solver.karamelo import translate_file
+
+    data = Path(__file__).resolve().parents[1] / "data" / "karamelo"
+    fake.on("POST", "/v1/jobs", httpx.Response(202, json=job_record()))
+    with pytest.warns(KarameloImportWarning) as caught:
+        client.submit(data / "Cantilever__2D__cantilever_force_tip.mpm")
+    assert sent_json(fake.requests[0])["scene"] == translate_file(data / "Cantilever__2D__cantilever_force_tip.mpm").scene
+    assert any(":46: note: fix(fEnd, force_nodes" in str(w.message) for w in caught)
+    with pytest.raises(ValueError, match="vertical_bar.mpm: cannot import the Karamelo file: line 34: .* old syntax"):
+        client.submit(data / "Vertical_bar__ULMPM__vertical_bar.mpm")
+
+
 def test_a_missing_or_broken_scene_file_is_named(client, tmp_path):
     with pytest.raises(FileNotFoundError, match="nowhere.json"):
         client.submit(tmp_path / "nowhere.json")

@@ -165,3 +165,20 @@ def test_mpm_import_writes_the_scene_and_lists_the_rest(tmp_path, capsys):
     assert cli.main(["import", "karamelo", str(DATA / "Cantilever__2D__cantilever_force_tip.mpm"),
                      "-o", str(tmp_path / "beam.json")]) == cli.EXIT_PARTIAL
     assert "cantilever_force_tip.mpm:46: note: fix(fEnd, force_nodes" in capsys.readouterr().err
+
+
+def test_mpm_validate_and_run_take_a_karamelo_file(tmp_path, capsys):
+    """Imported on the way: the notes and left-out lines on stderr, then as for a scene."""
+    assert cli.main(["validate", str(DATA / "two-disks.mpm")]) == cli.EXIT_OK
+    captured = capsys.readouterr()
+    assert "valid 2D scene 'two-disks (imported from Karamelo)'" in captured.out
+    assert "two-disks.mpm:38: not translated: dump(dump2, all, grid" in captured.err
+    assert cli.main(["validate", str(DATA / "Vertical_bar__ULMPM__vertical_bar.mpm")]) == cli.EXIT_INVALID
+    assert "cannot import the Karamelo file: line 34: solid(solid1, rectangle, ...) is old syntax" in \
+        capsys.readouterr().err
+    short = tmp_path / "disks.mpm"   # the two disks for 5 steps
+    short.write_text((DATA / "two-disks.mpm").read_text().replace("run_time(3.5)", "run(5)"))
+    assert cli.main(["run", str(short), "-o", str(tmp_path / "out"), "--progress", "none"]) == cli.EXIT_OK
+    assert (tmp_path / "out" / "result.h5").exists()
+    assert cli.main(["preview", str(tmp_path / "out" / "result.h5"), "--field", "von_mises",
+                     "-o", str(tmp_path / "vm.png")]) == cli.EXIT_OK

@@ -2,7 +2,9 @@
 
 Accepted: a dict, a path to a ``.json`` file (``.yaml``/``.yml`` when PyYAML is
 installed), JSON text, or any pydantic model such as the solver's ``Scene``
-(the SDK does not import the solver; it only calls ``model_dump``).
+(the SDK does not import the solver; it only calls ``model_dump``), or a Karamelo
+input file (``.mpm``), imported into a scene by the solver's importer where the solver
+is installed (its notes and left-out lines are warnings).
 
 The service never opens a path named in a scene, so a geometry that names a local
 file (``{"type": "mesh", "file": "part.stl"}``) is sent with the file's bytes inlined
@@ -15,6 +17,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import warnings
 from pathlib import Path
 from typing import Any, Union
 
@@ -37,6 +40,8 @@ def scene_document(scene: SceneLike) -> dict:
 def _read_file(path: Path) -> dict:
     if not path.is_file():
         raise FileNotFoundError(f"scene file not found: {path}")
+    if path.suffix.lower() == ".mpm":
+        return _karamelo(path)
     text = path.read_text(encoding="utf-8")
     if path.suffix.lower() in (".yaml", ".yml"):
         try:
@@ -49,6 +54,29 @@ def _read_file(path: Path) -> dict:
     if not isinstance(document, dict):
         raise ValueError(f"{path}: a scene is a JSON object, not {type(document).__name__}")
     return document
+
+
+class KarameloImportWarning(UserWarning):
+    """A line of a Karamelo file that the import left out or translated with a difference."""
+
+
+def _karamelo(path: Path) -> dict:
+    """A Karamelo input file imported into a scene (`mpm import karamelo`): each line it leaves
+    out or notes is a KarameloImportWarning; a file it cannot import is a ValueError naming the line."""
+    try:
+        from solver.karamelo import KarameloError, translate_file
+    except ImportError:
+        raise ValueError(f"{path}: importing a Karamelo file needs the solver package (mpm-service), "
+                         "or run `mpm import karamelo` where it is installed and submit the scene") from None
+    try:
+        translation = translate_file(path)
+    except KarameloError as exc:
+        raise ValueError(f"{path}: cannot import the Karamelo file: {exc}") from None
+    for kind, items in (("note", translation.notes), ("not translated", translation.untranslated)):
+        for item in items:
+            warnings.warn(f"{path}:{item.line}: {kind}: {item.text + ': ' if item.text else ''}{item.reason}",
+                          KarameloImportWarning, stacklevel=4)
+    return translation.scene
 
 
 def _parse_json(text: str, where: str) -> dict:
