@@ -841,13 +841,14 @@ class Scene(SceneModel):
 
     def grid_shape(self) -> tuple[int, ...]:
         """Number of cells per axis."""
+        sizes = self.cell_sizes()
         if self.grid.upper is not None:
-            upper = np.array(self.grid.upper)
+            upper = self.grid.upper
         else:
-            upper = self._bodies_box()[1] + 2 * np.array(self.cell_sizes())
-        with np.errstate(over="ignore", invalid="ignore"):   # an infinite extent: MAX_COUNT cells
-            cells = (upper - np.array(self.grid_lower())) / np.array(self.cell_sizes())
-        cells = [max(1, count_up(float(n) - 1e-9)) for n in cells]
+            upper = [float(u) + 2 * h for u, h in zip(self._bodies_box()[1], sizes)]
+        # Python floats (the same IEEE operations as numpy's, without its per-call cost: this
+        # runs for every body); an infinite extent gives inf, counted as MAX_COUNT cells
+        cells = [max(1, count_up((u - lo) / h - 1e-9)) for u, lo, h in zip(upper, self.grid_lower(), sizes)]
         if shape_functions.REGISTRY[self.method.shape_function].even_cells:   # elements of two cells (bernstein)
             cells = [n + n % 2 for n in cells]
         return tuple(cells)
@@ -973,17 +974,19 @@ def _grid_extent_ok(scene: Scene, problems: list[tuple[str, str]]) -> bool:
 def _frame_problems(scene: Scene) -> list[tuple[str, str]]:
     """At most a frame a step (first and last included): frames <= steps + 1, the steps being
     end / dt for a fixed dt, else time.max_steps (the run stops there whatever dt does).
-    More frames than that would each make the runner shorten a step to land on it. The
-    default (51) is left alone: short test runs rely on it, and it bounds nothing."""
-    if "frames" not in scene.output.model_fields_set:
-        return []
+    More frames than that would each make the runner shorten a step to land on it. Up to
+    the default count (51) is always allowed: that bounds nothing worth refusing, and a
+    scene whose dt is raised (a sweep over /time/dt, a coarse trial) keeps its frames."""
     steps = scene.time.fixed_steps()
     bound, source = (steps, "end / dt") if steps is not None else (scene.time.max_steps, "time.max_steps")
-    if scene.output.frames <= bound + 1:
+    if scene.output.frames <= max(bound + 1, ALWAYS_FRAMES):
         return []
     shown = scene.output.frames if scene.output.frames < MAX_COUNT else f"{scene.output.frames:.3g}"
     return [("output.frames", f"{shown} frames, more than the {bound} time steps ({source}) + 1: "
                               "a run writes at most one frame a step, the first and the last included")]
+
+
+ALWAYS_FRAMES = Output.model_fields["frames"].default   # 51
 
 
 def _condition_problems(scene: Scene, length_ok) -> list[tuple[str, str]]:

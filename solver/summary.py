@@ -176,6 +176,12 @@ def empty_bodies(scene: Scene, per_body: list[int]) -> list[tuple[str, str]]:
                                  f"(particles_per_cell = {body.particles_per_cell} per axis) falls inside its "
                                  "geometry; make it larger than a cell, or the cells smaller")
                 for i, (body, count) in enumerate(zip(scene.bodies, per_body)) if count == 0]
+    listed = problems[:MAX_LISTED]   # thousands of empty bodies: an answer of a few lines, not megabytes
+    if len(problems) > MAX_LISTED:
+        listed.append(("bodies", f"and {len(problems) - MAX_LISTED} more bodies seed no particle"))
     if per_body and len(problems) == len(per_body) and len(problems) > 1:
-        problems.append(("bodies", "no body seeds a particle: the scene has nothing to simulate"))
-    return problems
+        listed.append(("bodies", "no body seeds a particle: the scene has nothing to simulate"))
+    return listed
+
+
+MAX_LISTED = 20   # empty bodies named one by one

@@ -40,6 +40,12 @@ class TestFrames:
         load_scene(_changed(lambda s: s["output"].update(frames=3501)))
         assert [e["path"] for e in _errors(_changed(lambda s: s["output"].update(frames=3502)))] == ["output.frames"]
 
+    def test_up_to_the_default_count_is_always_allowed(self):
+        def coarse(frames):   # 10 steps
+            return lambda s: (s["time"].update(end=1.0, dt=0.1, allow_unstable_dt=True), s["output"].update(frames=frames))
+        load_scene(_changed(coarse(51)))
+        assert [e["path"] for e in _errors(_changed(coarse(52)))] == ["output.frames"]
+
     def test_an_adaptive_run_is_bounded_by_max_steps(self):
         def change(s):
             s["time"] = {"end": 3.5, "max_steps": 1000}
@@ -109,6 +115,16 @@ class TestEmptyBodies:
         scene = load_scene(_changed(lambda s: s["bodies"][1]["geometry"].update(radius=0.001)))
         problems = empty_bodies(scene, summarize(scene).particles_per_body)
         assert [path for path, _ in problems] == ["bodies[1]"] and "'disk2' seeds no particle" in problems[0][1]
+
+    def test_thousands_of_empty_bodies_are_named_in_a_few_lines(self):
+        def change(s):
+            s["bodies"] = [{"name": f"b{i}", "material": "rubber", "geometry": {
+                "type": "sphere", "center": [-0.45 + 0.01 * (i % 90), -0.45 + 0.01 * (i // 90)], "radius": 0.001}}
+                for i in range(900)]
+        scene = load_scene(_changed(change))
+        problems = empty_bodies(scene, summarize(scene).particles_per_body)
+        assert len(problems) == 22 and problems[20] == ("bodies", "and 880 more bodies seed no particle")
+        assert problems[21][0] == "bodies" and "nothing to simulate" in problems[21][1]
 
     def test_a_scene_without_particles_is_said_so(self):
         scene = load_scene(_changed(lambda s: s["grid"].update(cell_size=1e300)))

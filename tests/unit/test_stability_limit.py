@@ -11,6 +11,7 @@ from solver.scene import SceneError, load_scene
 def two_disks(dt: float, **time) -> dict:
     scene = load_example("two_disks")
     scene["time"] = {**scene["time"], "dt": dt, **time}
+    scene["output"]["frames"] = 11   # a frame a step at most: 3.5 / 0.2 is 18 steps (the example has 71 frames)
     return scene
 
 
