@@ -30,7 +30,6 @@ from pathlib import Path
 
 import httpx
 from hypothesis import HealthCheck, Phase, given, settings
-from hypothesis import strategies as st
 
 ROOT = Path(__file__).resolve().parent.parent
 for folder in ("tests/security", "tests/integration", "tests/clients"):
