@@ -36,6 +36,13 @@ def _star_body(scene: dict) -> None:
     scene["bodies"][0]["geometry"] = {"type": "polygon", "vertices": vertices}
 
 
+def _specks(scene: dict) -> None:
+    # the 6400 bodies of which 6384 seeded nothing, scaled to the body limit
+    scene["bodies"] = [{"name": f"b{i}", "material": "rubber", "geometry": {
+        "type": "sphere", "center": [round(-0.45 + 0.023 * (i % 40), 3), round(-0.45 + 0.023 * (i // 40), 3)],
+        "radius": 0.004 if i % 100 else 0.02}} for i in range(1500)]
+
+
 # A 1 m cube of 1 cm cells (10^6 nodes, within MPM_MAX_GRID_NODES), filled with 100^3 particles a cell
 TRILLION_PARTICLES = {
     "version": 1, "name": "trillion", "dimension": 3,
@@ -107,6 +114,8 @@ HOSTILE = [
     ("a body smaller than its particle spacing", "POST", "/v1/jobs",
      {"scene": _scene(lambda s: s["bodies"][1]["geometry"].update(radius=1e-4))}, 422, "bodies[1]",
      "'disk2' seeds no particle"),
+    ("1500 bodies, most seeding no particle", "POST", "/v1/jobs", {"scene": _scene(_specks)}, 422, "bodies",
+     "more bodies seed no particle"),
     ("a 10,000-vertex star polygon", "POST", "/v1/scenes/validate", _scene(_star_body), 422,
      "bodies[0].geometry.vertices", "too complex"),
     ("a 5000-digit integer", "POST", "/v1/scenes/validate",
