@@ -62,7 +62,8 @@ INF = float("inf")
 
 
 class KarameloError(SolverError, ValueError):
-    """A file that cannot be read at all (not a translation problem): names the line."""
+    """A file that cannot be imported: a line that cannot be read, or old syntax that Karamelo
+    itself no longer reads. Names the line."""
 
 
 @dataclass
@@ -85,7 +86,7 @@ class _Skip(Exception):
 
 @dataclass
 class _Value:
-    text: str                  # in the scene's expression syntax
+    text: str                  # in the scene's expression syntax (a variable in x, y, z, t: its scene name)
     number: float | None       # when it depends on nothing
     runtime: str | None = None   # why the scene cannot have it (computed during a Karamelo run, too long)
 
