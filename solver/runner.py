@@ -130,7 +130,8 @@ def run(
     started = wallclock.perf_counter()
     with _Compiling(scene, started, progress) as compiling:
         result = _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds)
-    cost.mark_compiled(scene, compiling.meter.seconds, compiling.meter.count)
+    if compiling.meter.count or not cost.is_compiled(scene):   # kernels compiled after the first step too
+        cost.mark_compiled(scene, compiling.meter.seconds, compiling.meter.count)
     result.compiled, result.compile_seconds = compiling.meter.count, round(compiling.meter.seconds, 3)
     return result
 
@@ -285,12 +286,12 @@ def _progress(sim: ExplicitMPM, end: float, dt: float, rates: RateMeter, energie
 class _Compiling:
     """The run's first stage: numba loads or compiles the kernels until the first step is done.
 
-    Counts the compilations (Result.compiled) and, for a cold variant, starts the helper that
-    compiles the step from its other end (solver/precompile.py); with a progress callback, a thread reports
-    stage "compiling" every REPORT_S with an ETA of the compilation left (the cost model's
-    figure, solver/cost.py) plus the run's estimate, since the main thread is in the compiler
-    and reports nothing. After the first step the variant is marked compiled, so that later
-    estimates leave the compilation out."""
+    Counts the compilations (Result.compiled) and, for a cold variant, starts the helper
+    that compiles the step from its other end (solver/precompile.py). With a progress
+    callback, a thread reports stage "compiling" every REPORT_S with an ETA of the
+    compilation left (the cost model's figure, solver/cost.py) plus the run's estimate,
+    since the main thread is in the compiler and reports nothing. After the first step the
+    variant is marked compiled, so that later estimates leave the compilation out."""
 
     REPORT_S = 1.0
 
