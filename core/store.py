@@ -16,6 +16,7 @@ from datetime import datetime, timezone
 from typing import Any, Iterable
 
 import redis
+import redis.asyncio
 
 from core.models import ACTIVE, FINISHED, RECORD_FIELDS, SWEEP_FIELDS, now_iso
 
@@ -240,10 +241,12 @@ def _decode_cursor(cursor: str) -> tuple[int, str]:
 
 
 class JobStore:
-    """The job records. Needs a client made with `decode_responses=True`."""
+    """The job records. Needs clients made with `decode_responses=True`; `async_client`
+    (optional) serves `get_async`, for callers that must not block an event loop."""
 
-    def __init__(self, client: redis.Redis):
+    def __init__(self, client: redis.Redis, async_client: redis.asyncio.Redis | None = None):
         self.redis = client
+        self.async_redis = async_client
         self._create = client.register_script(_CREATE)
         self._transition = client.register_script(_TRANSITION)
         self._delete = client.register_script(_DELETE)
@@ -306,6 +309,12 @@ class JobStore:
 
     def get(self, job_id: str) -> dict[str, Any] | None:
         return self.decode(self.redis.hgetall(job_key(job_id)))
+
+    async def get_async(self, job_id: str) -> dict[str, Any] | None:
+        """`get` through the async client (a store made without one cannot answer it)."""
+        if self.async_redis is None:
+            raise RuntimeError("this JobStore has no async client")
+        return self.decode(await self.async_redis.hgetall(job_key(job_id)))
 
     def transition(self, job_id: str, allowed: Iterable[str], to: str,
                    **fields: Any) -> str | None:

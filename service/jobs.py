@@ -7,21 +7,21 @@ import shutil
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from fastapi import APIRouter, Depends, Query, Response
+from fastapi import APIRouter, Query, Response
 from fastapi.responses import FileResponse, JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
 from core import webhooks
 from core.celery_app import enqueue
 from core.models import FINISHED, STATUSES, JobFields, Status, new_job
-from core.paths import InvalidJobId, JobFiles, new_job_id, parse_job_id
-from core.store import CursorError, JobStore, job_key
+from core.paths import JobFiles, new_job_id
+from core.store import CursorError
 from service import quotas, results
-from service.auth import caller, owns
+from service.deps import CallerDep, OwnedJob, ServicesDep, caller_job, job_not_found
 from service.errors import ApiError, documented, owned_resource, validation_error
 from service.scenes import WrapsScene, check_scene, granted_processes
 from service.settings import ApiSettings
-from service.state import Services, services
+from service.state import Services
 
 log = logging.getLogger("mpm.api")
 FIELD_NAME = r"^[A-Za-z_][A-Za-z0-9_]{0,63}$"  # an output field's name (it becomes part of a cache file's name)
@@ -55,25 +55,6 @@ def public(record: dict[str, Any]) -> dict[str, Any]:
                     "series": f"{base}/series", "cancel": f"{base}/cancel", "scene": f"{base}/scene",
                     "frames": f"{base}/frames", "animation": f"{base}/animation.gif"}
     return job
-
-
-def _job_id(text: str) -> str:
-    try:
-        return parse_job_id(text)
-    except InvalidJobId:
-        raise _not_found(text) from None
-
-
-def _not_found(job_id: str) -> ApiError:
-    return ApiError(404, "not_found", f"no job {job_id}")
-
-
-def _record(svc: Services, job_id: str, owner: str | None) -> dict[str, Any]:
-    """The caller's job; another owner's is answered like a missing one, so ids do not leak."""
-    record = svc.store.get(job_id)
-    if record is None or not owns(record, owner):
-        raise _not_found(job_id)
-    return record
 
 
 @dataclass
@@ -139,8 +120,7 @@ def checked_callback(url: str | None, settings: ApiSettings, path: str = "callba
                                    429: "over MPM_MAX_CONCURRENT_JOBS or one of the caller's quotas "
                                         "(details.limit names it; Retry-After)",
                                    507: "the disk budget is spent (MPM_MAX_TOTAL_BYTES, MPM_MIN_FREE_BYTES)"}))
-def submit_job(body: JobRequest, svc: Services = Depends(services),
-               owner: str | None = Depends(caller)) -> dict[str, Any]:
+def submit_job(body: JobRequest, svc: ServicesDep, owner: CallerDep) -> dict[str, Any]:
     """Validate the scene, store the job and put it on the queue. A rejected job leaves no trace."""
     callback_url = checked_callback(body.callback_url, svc.settings)
     job = new_job_from(body.scene, body.processes, owner, svc.settings, callback_url=callback_url)
@@ -156,7 +136,7 @@ def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500)
               cursor: str | None = None,
               id_prefix: str | None = Query(None, pattern=r"^[0-9a-f-]{1,36}$",
                                             description="only jobs whose id starts so (at most `limit`)"),
-              svc: Services = Depends(services), owner: str | None = Depends(caller)) -> dict[str, Any]:
+              *, svc: ServicesDep, owner: CallerDep) -> dict[str, Any]:
     """The caller's jobs, newest first; pass `next_cursor` back as `cursor` for the next page.
     With `id_prefix`: the jobs whose id starts with it (clients resolve a short id so)."""
     if id_prefix is not None:
@@ -171,43 +151,37 @@ def list_jobs(status: Status | None = None, limit: int = Query(50, ge=1, le=500)
 
 
 @router.get("/{job_id}", response_model=Job)
-async def get_job(job_id: str, svc: Services = Depends(services),
-                  owner: str | None = Depends(caller)) -> JSONResponse:
-    """One job; the route clients poll, so it reads Redis without leaving the event loop."""
-    job_id = _job_id(job_id)
-    record = JobStore.decode(await svc.async_redis.hgetall(job_key(job_id)))
-    if record is None or not owns(record, owner):
-        raise _not_found(job_id)
-    return JSONResponse(public(record))  # the record is already the answer: no re-validation
+async def get_job(job: OwnedJob) -> JSONResponse:
+    """One job; the route clients poll, so it is read without leaving the event loop."""
+    return JSONResponse(public(job))  # the record is already the answer: no re-validation
 
 
 @router.post("/{job_id}/cancel", status_code=202, response_model=Job,
              responses=documented({409: "the job has already finished"}))
-def cancel_job(job_id: str, svc: Services = Depends(services),
-               owner: str | None = Depends(caller)) -> dict[str, Any]:
+def cancel_job(job: OwnedJob, svc: ServicesDep) -> dict[str, Any]:
     """A queued job is cancelled at once; a running one within a few seconds
     (its solver is stopped, the frames written so far stay readable)."""
-    job_id = _job_id(job_id)
-    _record(svc, job_id, owner)
+    job_id = job["id"]
     before = svc.store.request_cancel(job_id)
     if before is None:
-        raise _not_found(job_id)
+        raise job_not_found(job_id)
     if before in FINISHED:
         raise ApiError(409, "job_finished", f"job {job_id} has already {before}", {"status": before})
     log.info("job cancel requested", extra={"job_id": job_id, "status": before})
-    return public(_record(svc, job_id, owner))
+    after = svc.store.get(job_id)  # the record as the cancel left it
+    if after is None:
+        raise job_not_found(job_id)
+    return public(after)
 
 
 @router.delete("/{job_id}", status_code=204, response_class=Response,
                responses=documented({409: "the job has not finished"}))
-def delete_job(job_id: str, svc: Services = Depends(services),
-               owner: str | None = Depends(caller)) -> Response:
+def delete_job(job: OwnedJob, svc: ServicesDep) -> Response:
     """Remove a finished job and its files."""
-    job_id = _job_id(job_id)
-    _record(svc, job_id, owner)
+    job_id = job["id"]
     status = svc.store.delete(job_id)
     if status is None:
-        raise _not_found(job_id)
+        raise job_not_found(job_id)
     if status not in FINISHED:
         raise ApiError(409, "job_not_finished", f"job {job_id} is {status}; cancel it first",
                        {"status": status})
@@ -220,12 +194,10 @@ def remove_files(svc: Services, job_id: str) -> None:
     shutil.rmtree(JobFiles(svc.settings.jobs_dir, job_id).dir, ignore_errors=True)
 
 
-def _result_files(svc: Services, job_id: str, owner: str | None,
-                  running_too: bool = False) -> tuple[JobFiles, bool]:
+def _result_files(svc: Services, job: dict[str, Any], running_too: bool = False) -> tuple[JobFiles, bool]:
     """The files of a job that has a result file (a partial one counts), and whether
     the job has finished. A running job's file is offered only when `running_too`."""
-    job_id = _job_id(job_id)
-    status = _record(svc, job_id, owner)["status"]
+    job_id, status = job["id"], job["status"]
     files = JobFiles(svc.settings.jobs_dir, job_id)
     finished = status in FINISHED
     if not (finished or (running_too and status == "running")) or not files.result.is_file():
@@ -238,22 +210,20 @@ def _result_files(svc: Services, job_id: str, owner: str | None,
 @router.get("/{job_id}/result.h5", response_class=FileResponse,
             responses={200: {"content": {"application/x-hdf5": {}}},
                        **documented({409: "no result until the job has finished"})})
-def get_result(job_id: str, svc: Services = Depends(services),
-               owner: str | None = Depends(caller)) -> FileResponse:
+def get_result(job: OwnedJob, svc: ServicesDep) -> FileResponse:
     """The HDF5 result (partial for a failed or cancelled job)."""
-    files, _ = _result_files(svc, job_id, owner)
+    files, _ = _result_files(svc, job)
     return FileResponse(files.result, media_type="application/x-hdf5",
                         filename=f"{files.dir.name}.h5")
 
 
 @router.get("/{job_id}/preview.png", response_class=Response,
             responses={200: {"content": {"image/png": {}}}, **documented({409: "no result yet"})})
-def get_preview(job_id: str, frame: int = -1,
-                field: str | None = Query(None, pattern=FIELD_NAME),
-                svc: Services = Depends(services), owner: str | None = Depends(caller)) -> Response:
+def get_preview(job_id: str, svc: ServicesDep, owner: CallerDep, frame: int = -1,
+                field: str | None = Query(None, pattern=FIELD_NAME)) -> Response:
     """Frame `frame` (negative: from the end) coloured by `field` (default: the scene's
     preview field). Finished jobs' images are cached; a running job's are drawn each time."""
-    files, finished = _result_files(svc, job_id, owner, running_too=True)
+    files, finished = _result_files(svc, caller_job(svc, job_id, owner), running_too=True)
     png = results.preview(files, frame, field, cache=finished)
     if isinstance(png, bytes):
         return Response(png, media_type="image/png", headers={"Cache-Control": "no-store"})
@@ -261,11 +231,10 @@ def get_preview(job_id: str, frame: int = -1,
 
 
 @router.get("/{job_id}/frames", responses=documented({409: "no result yet"}))
-def get_frames(job_id: str, svc: Services = Depends(services),
-               owner: str | None = Depends(caller)) -> dict[str, Any]:
+def get_frames(job: OwnedJob, svc: ServicesDep) -> dict[str, Any]:
     """The frames written so far (index, time, step, particles), the fields they can be
     coloured by, the axes (r and z for axisymmetric scenes) and the scene's units."""
-    files, _ = _result_files(svc, job_id, owner, running_too=True)
+    files, _ = _result_files(svc, job, running_too=True)
     return results.frames(files)
 
 
@@ -273,11 +242,11 @@ def get_frames(job_id: str, svc: Services = Depends(services),
             responses={200: {"content": {"application/octet-stream": {}},
                              "description": "uint32 header length, JSON header, float32 xyz, float32 values"},
                        **documented({409: "no result yet"})})
-def get_particles(job_id: str, frame: int, field: str | None = Query(None, pattern=FIELD_NAME),
-                  svc: Services = Depends(services), owner: str | None = Depends(caller)) -> Response:
+def get_particles(job_id: str, frame: int, svc: ServicesDep, owner: CallerDep,
+                  field: str | None = Query(None, pattern=FIELD_NAME)) -> Response:
     """One frame's particle positions and one value each (`field`; default: the scene's
     preview field), packed for the dashboard's 3D viewer (docs/service.md)."""
-    files, finished = _result_files(svc, job_id, owner, running_too=True)
+    files, finished = _result_files(svc, caller_job(svc, job_id, owner), running_too=True)
     return Response(results.particles(files, frame, field), media_type="application/octet-stream",
                     headers={"Cache-Control": "private, max-age=3600" if finished else "no-store"})
 
@@ -285,29 +254,26 @@ def get_particles(job_id: str, frame: int, field: str | None = Query(None, patte
 @router.get("/{job_id}/animation.{kind}", response_class=FileResponse,
             responses={200: {"content": {"image/gif": {}, "video/mp4": {}}},
                        **documented({409: "no animation until the job has finished"})})
-def get_animation(job_id: str, kind: Literal["gif", "mp4"], field: str | None = Query(None, pattern=FIELD_NAME),
-                  svc: Services = Depends(services), owner: str | None = Depends(caller)) -> FileResponse:
+def get_animation(job_id: str, kind: Literal["gif", "mp4"], svc: ServicesDep, owner: CallerDep,
+                  field: str | None = Query(None, pattern=FIELD_NAME)) -> FileResponse:
     """Every frame drawn like the previews, one colour scale for the run, as a GIF or an
     MP4 (H.264); rendered on the first request (seconds to a minute), then cached."""
-    files, _ = _result_files(svc, job_id, owner)
+    files, _ = _result_files(svc, caller_job(svc, job_id, owner))
     path = results.animation(files, field, f".{kind}")
     return FileResponse(path, media_type="image/gif" if kind == "gif" else "video/mp4")
 
 
 @router.get("/{job_id}/series")
-def get_series(job_id: str, svc: Services = Depends(services),
-               owner: str | None = Depends(caller)) -> dict[str, list[float | None]]:
+def get_series(job: OwnedJob, svc: ServicesDep) -> dict[str, list[float | None]]:
     """The time series written so far (time, dt, energies...), as lists."""
-    files, _ = _result_files(svc, job_id, owner, running_too=True)
+    files, _ = _result_files(svc, job, running_too=True)
     return results.series(files)
 
 
 @router.get("/{job_id}/scene")
-def get_scene(job_id: str, svc: Services = Depends(services),
-              owner: str | None = Depends(caller)) -> dict[str, Any]:
+def get_scene(job: OwnedJob, svc: ServicesDep) -> dict[str, Any]:
     """The validated scene of the job."""
-    job_id = _job_id(job_id)
-    _record(svc, job_id, owner)
+    job_id = job["id"]
     try:
         return json.loads(JobFiles(svc.settings.jobs_dir, job_id).scene.read_text(encoding="utf-8"))
     except FileNotFoundError:  # the folder was removed by hand
@@ -322,11 +288,11 @@ MAX_LOG_LINES = 5000
                              "description": "the lines; X-MPM-Next-Line: the `since` of the next call"}})
 def get_log(job_id: str, since: int = Query(0, ge=0, le=10**9), limit: int = Query(MAX_LOG_LINES, ge=1,
                                                                                          le=MAX_LOG_LINES),
-            svc: Services = Depends(services), owner: str | None = Depends(caller)) -> Response:
+            *, svc: ServicesDep, owner: CallerDep) -> Response:
     """The solver's log lines from line `since` (0: the first), at most `limit`; while
     the job runs, call again with X-MPM-Next-Line for the lines written since."""
-    job_id = _job_id(job_id)
-    status = _record(svc, job_id, owner)["status"]
+    job = caller_job(svc, job_id, owner)
+    job_id, status = job["id"], job["status"]
     lines: list[str] = []
     files = JobFiles(svc.settings.jobs_dir, job_id)
     try:

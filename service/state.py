@@ -17,22 +17,20 @@ from service.settings import ApiSettings
 @dataclass
 class Services:
     settings: ApiSettings
-    store: JobStore
+    store: JobStore  # with an async client too: a job's status is read without a thread hop
     celery: Celery
-    # For the hottest route (a job's status, polled by every client): no thread hop.
-    async_redis: redis.asyncio.Redis
     disk: DiskUsage  # the jobs' folders, measured for each admission (at most every few seconds)
 
     @classmethod
     def connect(cls, settings: ApiSettings) -> "Services":
         options = dict(decode_responses=True, socket_timeout=5, health_check_interval=30)
         client = redis.Redis.from_url(settings.redis_url, **options)
-        return cls(settings, JobStore(client), make_celery(settings),
-                   redis.asyncio.Redis.from_url(settings.redis_url, **options), DiskUsage(settings.jobs_dir))
+        async_client = redis.asyncio.Redis.from_url(settings.redis_url, **options)
+        return cls(settings, JobStore(client, async_client), make_celery(settings), DiskUsage(settings.jobs_dir))
 
     async def close(self) -> None:
         self.store.redis.close()
-        await self.async_redis.aclose()
+        await self.store.async_redis.aclose()
         self.celery.close()
 
 

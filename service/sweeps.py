@@ -7,17 +7,17 @@ import logging
 import uuid
 from typing import Any
 
-from fastapi import APIRouter, Depends, Query, Response
+from fastapi import APIRouter, Query, Response
 from pydantic import ConfigDict, Field
 
 from core import sweeps
 from core.models import ACTIVE, FINISHED, SweepMode, SweepRecord, now_iso
 from service import quotas
-from service.auth import caller, owns
+from service.deps import CallerDep, OwnedSweep, ServicesDep
 from service.errors import ApiError, documented, owned_resource, validation_error
 from service.jobs import NewJob, checked_callback, new_job_from, remove_files, store_and_enqueue
 from service.scenes import WrapsScene
-from service.state import Services, services
+from service.state import Services
 
 log = logging.getLogger("mpm.api")
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"],
@@ -99,22 +99,10 @@ def _show(combo: dict[str, Any]) -> str:
     return ", ".join(f"{pointer} = {value!r}" for pointer, value in combo.items())
 
 
-def _sweep(svc: Services, sweep_id: str, owner: str | None) -> dict[str, Any]:
-    try:
-        sweep_id = str(uuid.UUID(sweep_id))
-    except ValueError:
-        raise ApiError(404, "not_found", f"no sweep {sweep_id}") from None
-    record = svc.store.get_sweep(sweep_id)
-    if record is None or not owns(record, owner):
-        raise ApiError(404, "not_found", f"no sweep {sweep_id}")
-    return record
-
-
 @router.post("", status_code=202,
              responses=documented({429: "the sweep's jobs would go over a limit or a quota (none is queued)",
                                    507: "the disk budget is spent"}))
-def submit_sweep(body: SweepRequest, svc: Services = Depends(services),
-                 owner: str | None = Depends(caller)) -> dict[str, Any]:
+def submit_sweep(body: SweepRequest, svc: ServicesDep, owner: CallerDep) -> dict[str, Any]:
     """One job per combination; all are validated and admitted together, or none."""
     callback_url = checked_callback(body.callback_url, svc.settings)
     combos = _checked_parameters(body, svc.settings.max_sweep_jobs)
@@ -131,25 +119,21 @@ def submit_sweep(body: SweepRequest, svc: Services = Depends(services),
 
 
 @router.get("")
-def list_sweeps(limit: int = Query(50, ge=1, le=500), svc: Services = Depends(services),
-                owner: str | None = Depends(caller)) -> dict[str, Any]:
+def list_sweeps(svc: ServicesDep, owner: CallerDep, limit: int = Query(50, ge=1, le=500)) -> dict[str, Any]:
     """The caller's sweeps, newest first, each with its counts and progress."""
     found = [svc.store.get_sweep(sweep_id) for sweep_id in svc.store.sweep_ids(owner, limit)]
     return {"sweeps": [sweeps.view(svc.store, sweep) for sweep in found if sweep]}
 
 
 @router.get("/{sweep_id}")
-def get_sweep(sweep_id: str, svc: Services = Depends(services),
-              owner: str | None = Depends(caller)) -> dict[str, Any]:
+def get_sweep(sweep: OwnedSweep, svc: ServicesDep) -> dict[str, Any]:
     """The sweep: status counts, progress, each job's parameters and status."""
-    return sweeps.view(svc.store, _sweep(svc, sweep_id, owner))
+    return sweeps.view(svc.store, sweep)
 
 
 @router.post("/{sweep_id}/cancel", status_code=202)
-def cancel_sweep(sweep_id: str, svc: Services = Depends(services),
-                 owner: str | None = Depends(caller)) -> dict[str, Any]:
+def cancel_sweep(record: OwnedSweep, svc: ServicesDep) -> dict[str, Any]:
     """Cancel every job of the sweep that has not finished."""
-    record = _sweep(svc, sweep_id, owner)
     for job in record["jobs"]:
         svc.store.request_cancel(job["id"])
     log.info("sweep cancel requested", extra={"sweep_id": record["id"]})
@@ -158,10 +142,8 @@ def cancel_sweep(sweep_id: str, svc: Services = Depends(services),
 
 @router.delete("/{sweep_id}", status_code=204, response_class=Response,
                responses=documented({409: "some of its jobs have not finished"}))
-def delete_sweep(sweep_id: str, svc: Services = Depends(services),
-                 owner: str | None = Depends(caller)) -> Response:
+def delete_sweep(record: OwnedSweep, svc: ServicesDep, owner: CallerDep) -> Response:
     """Remove a finished sweep, its jobs and their files."""
-    record = _sweep(svc, sweep_id, owner)
     shown = sweeps.view(svc.store, record)
     active = sum(shown["counts"][s] for s in ACTIVE)
     if active:
