@@ -9,6 +9,7 @@ import os
 import sys
 from functools import lru_cache
 from pathlib import Path
+from typing import Literal
 
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -44,6 +45,15 @@ class Settings(BaseSettings):
     warmup: bool = Field(True, description="compile the solver kernels when a worker starts")
     lease_seconds: float = Field(30.0, gt=0, description="a running job whose worker is silent this "
                                                           "long is put back on the queue")
+
+    # Where a job's solver runs (worker/launcher.py): "local", a child process of the worker;
+    # "slurm", a Slurm batch job (worker/slurm.py; docs/service.md, "Running jobs on a Slurm cluster").
+    launcher: Literal["local", "slurm"] = Field("local", description="local: a child process of the worker; "
+                                                                      "slurm: a Slurm batch job (sbatch)")
+    slurm_partition: str | None = Field(None, description="sbatch --partition (unset: the cluster's default)")
+    slurm_account: str | None = Field(None, description="sbatch --account (unset: the user's default)")
+    slurm_time_limit: str | None = Field(None, description="sbatch --time, e.g. 2:00:00 (unset: the "
+                                                           "partition's); a job ended by it resumes")
 
     # Nothing lost: checkpoints, attempts, disk (docs/reliability.md).
     checkpoint_seconds: float = Field(60.0, gt=0, description="wall-clock seconds between a job's "

@@ -32,6 +32,7 @@ class Outcome:
     done: ProgressLine | None  # the solver's last line, {"event": "done", ...Result}
     stopped: str | None         # why we stopped it ("cancelled", "timeout", "shutdown"), or None
     log_tail: str               # the end of the solver's stderr, for diagnostics
+    lost_why: str | None = None  # a run lost through no fault of its own (worker/slurm.py): why
 
 
 def solver_command(scene: Path, out_dir: Path, processes: int = 1, progress: str = "json",

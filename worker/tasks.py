@@ -34,7 +34,8 @@ from core.models import ACTIVE, FINISHED, now_iso
 from core.store import JobStore
 from solver.checkpoint import checkpoint_path
 from worker.disk import DiskQuota
-from worker.runner import Outcome, run_solver, solver_command
+from worker.launcher import launcher_for
+from worker.runner import Outcome
 
 log = logging.getLogger("mpm.worker")
 
@@ -143,21 +144,21 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         except redis.RedisError as exc:
             log.warning("progress not recorded: %s", exc, extra={"job_id": job_id})
 
-    command = solver_command(files.scene, files.dir, job.get("processes", 1),
-                             checkpoint_seconds=settings.checkpoint_seconds)
+    launcher = launcher_for(settings)   # local, or Slurm (MPM_LAUNCHER)
     while True:
-        outcome = run_solver(
-            command, files.log, on_progress=on_progress, should_stop=should_stop,
-            progress_interval=settings.progress_interval,
-            grace_seconds=settings.cancel_grace_seconds,
+        outcome = launcher.run(
+            job_id, files, job.get("processes", 1), job.get("nodes") or 1,
+            on_progress=on_progress, should_stop=should_stop, progress_interval=settings.progress_interval,
             timeout_seconds=settings.max_job_seconds, env=_job_environment(settings))
         if not _killed(outcome):
             break
         lost += 1
         if lost >= settings.max_attempts:
-            _give_up(store, job_id, files, lost, f"its solver was killed by signal {-outcome.returncode}")
+            _give_up(store, job_id, files, lost,
+                     outcome.lost_why or f"its solver was killed by signal {-outcome.returncode}")
             return
-        log.warning("solver killed by signal %d: resuming from its checkpoint", -outcome.returncode,
+        log.warning("%s: resuming from its checkpoint",
+                    outcome.lost_why or f"solver killed by signal {-outcome.returncode}",
                     extra={"job_id": job_id, "lost": lost})
         _retry_redis(lambda: store.update_running(job_id, lost=lost))
     _finish(store, job_id, files, outcome, settings, quota)

@@ -1,0 +1,40 @@
+"""Where a job's solver runs (MPM_LAUNCHER): the one object worker/tasks.py calls.
+
+- `local` (default): a child process of the worker (worker/runner.py), its ranks on
+  the worker's host; `"nodes"` does not apply.
+- `slurm`: a Slurm batch job (worker/slurm.py), `"processes"` ranks over `"nodes"` nodes.
+
+Both answer `run(job_id, files, processes, nodes, on_progress=, should_stop=, ...)`
+with a `worker.runner.Outcome`.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+from core.paths import JobFiles
+from core.settings import Settings
+from worker.runner import Outcome, ProgressLine, run_solver, solver_command
+
+
+class LocalLauncher:
+    def __init__(self, settings: Settings):
+        self.settings = settings
+
+    def run(self, job_id: str, files: JobFiles, processes: int = 1, nodes: int = 1, *,
+            on_progress: Callable[[ProgressLine], None],
+            should_stop: Callable[[], str | None],
+            progress_interval: float = 0.5,
+            timeout_seconds: float | None = None,
+            env: dict[str, str] | None = None) -> Outcome:
+        command = solver_command(files.scene, files.dir, processes,
+                                 checkpoint_seconds=self.settings.checkpoint_seconds)
+        return run_solver(command, files.log, on_progress=on_progress, should_stop=should_stop,
+                          progress_interval=progress_interval, grace_seconds=self.settings.cancel_grace_seconds,
+                          timeout_seconds=timeout_seconds, env=env)
+
+
+def launcher_for(settings: Settings):
+    if settings.launcher == "slurm":
+        from worker.slurm import SlurmLauncher
+        return SlurmLauncher(settings)
+    return LocalLauncher(settings)
