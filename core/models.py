@@ -64,6 +64,7 @@ class JobRecord(JobFields):
     callback_url: str | None = None  # the final record is POSTed there (worker/webhooks.py)
     sweep: str | None = None         # the sweep the job belongs to
     parameters: dict[str, Any] | None = None  # a sweep's job: its values, by JSON pointer
+    nodes: int | None = None         # the nodes its processes spread over (MPM_LAUNCHER=slurm)
 
 
 RECORD_FIELDS = frozenset(JobRecord.model_fields)

@@ -33,6 +33,8 @@ class JobRequest(WrapsScene):
     model_config = ConfigDict(extra="forbid")
     scene: dict[str, Any] = Field(description="the scene document (see GET /v1/schema/scene)")
     processes: int | None = Field(None, ge=1, description="processes to run it on; capped by the service")
+    nodes: int | None = Field(None, ge=1, le=4096, description="nodes the processes spread over on a Slurm "
+                                                              "cluster (MPM_LAUNCHER=slurm); default 1")
     callback_url: str | None = Field(None, max_length=2000,
                                      description="the final job record is POSTed there, signed "
                                                  "(X-MPM-Signature); allowed hosts: MPM_WEBHOOK_ALLOW")
@@ -123,7 +125,8 @@ def checked_callback(url: str | None, settings: ApiSettings, path: str = "callba
 def submit_job(body: JobRequest, svc: ServicesDep, owner: CallerDep) -> dict[str, Any]:
     """Validate the scene, store the job and put it on the queue. A rejected job leaves no trace."""
     callback_url = checked_callback(body.callback_url, svc.settings)
-    job = new_job_from(body.scene, body.processes, owner, svc.settings, callback_url=callback_url)
+    job = new_job_from(body.scene, body.processes, owner, svc.settings, callback_url=callback_url,
+                       nodes=body.nodes)
     store_and_enqueue(svc, owner, [job])
     log.info("job submitted", extra={"job_id": job.id, "job_name": job.record["name"],
                                      "particles": job.record["summary"].get("particles")})
