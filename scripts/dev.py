@@ -58,14 +58,24 @@ def _has_compose() -> bool:
         ["docker", "compose", "version"], capture_output=True).returncode == 0
 
 
+# The one-host Slurm cluster of tests/slurm_cluster.py: Debian's package of each daemon and client.
+SLURM_PACKAGES = {"munged": "munge", "slurmctld": "slurmctld", "slurmd": "slurmd", "sbatch": "slurm-client"}
+
+
+def _has_program(name: str) -> bool:
+    return bool(shutil.which(name)) or any(Path(folder, name).exists() for folder in ("/usr/sbin", "/sbin"))
+
+
 def ensure_test_tools() -> None:
-    """System tools some tests drive: headless Chromium (dashboard tests) and a compose
-    client (docker-compose.yml must parse). Installed from Debian's packages when missing."""
+    """System tools some tests drive: headless Chromium (dashboard tests), a compose
+    client (docker-compose.yml must parse) and Slurm with munge (the Slurm launcher's
+    tests start a one-host cluster). Installed from Debian's packages when missing."""
     missing = []
     if not (shutil.which("chromium") or shutil.which("chromium-browser")):
         missing.append("chromium")
     if not _has_compose():
         missing.append("docker-compose")
+    missing += [package for program, package in SLURM_PACKAGES.items() if not _has_program(program)]
     if not missing:
         return
     apt = shutil.which("apt-get")

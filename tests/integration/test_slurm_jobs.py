@@ -1,0 +1,146 @@
+"""Jobs on a real Slurm cluster through the whole stack (issue 53): Debian's munged,
+slurmctld and slurmd on this host (tests/slurm_cluster.py), an API and workers with
+MPM_LAUNCHER=slurm. A job runs as a batch job with its 2 ranks started by mpiexec's
+Slurm launcher, a cancel scancels it, and a job requeued by Slurm (as a preemption
+does: SIGTERM, then back to the queue) resumes from its checkpoint to the bits of a
+run never interrupted.
+
+Nothing here skips: without Slurm installed the cluster fixture raises (scripts/dev.py
+installs Debian's packages)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+import httpx
+import pytest
+
+from core.paths import JobFiles
+from service.embedded_redis import EmbeddedRedis
+from service_support import Stack, processes_with, wait_for_status, wait_until
+from tests.slurm_cluster import SlurmCluster
+from solver.checkpoint import checkpoint_path
+from tests.same_result import assert_same_result
+
+
+def tiny_1d(name: str, end: float) -> dict:
+    """8 particles between two slip walls: about 5000 steps (of 1 ms) a second here."""
+    return {"version": 1, "name": name, "dimension": 1,
+            "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},
+            "materials": {"m": {"model": "linear_elastic", "density": 1000.0, "youngs_modulus": 1000.0,
+                                "poisson_ratio": 0.3}},
+            "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25], "upper": [0.75]},
+                        "particles_per_cell": 2, "initial_velocity": [0.1]}],
+            "boundary_conditions": [{"type": "wall", "face": face, "mode": "slip"} for face in ("x-", "x+")],
+            "time": {"end": end, "dt": 0.001}, "output": {"frames": 3}}
+
+
+class SlurmStack(Stack):
+    """The integration stack with workers that hand jobs to Slurm (no warm-up: the
+    kernels compile in the batch jobs, into the shared kernel cache)."""
+
+    def _worker_process(self, number, warmup):
+        return super()._worker_process(number, warmup=False)
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    cluster = SlurmCluster(tmp_path_factory.mktemp("slurm"))
+    try:
+        yield cluster.start()
+    finally:
+        cluster.stop()
+
+
+@pytest.fixture(scope="module")
+def slurm_stack(cluster, tmp_path_factory):
+    # its own Redis: the session's stack must not take these jobs (nor these workers its jobs)
+    with EmbeddedRedis(tmp_path_factory.mktemp("slurm-redis")) as redis_server:
+        stack = SlurmStack(redis_server, tmp_path_factory.mktemp("slurm-data"), tmp_path_factory.mktemp("slurm-logs"))
+        stack.env.update(cluster.env)   # SLURM_CONF, for sbatch, squeue, scontrol and scancel
+        stack.env.update({"MPM_LAUNCHER": "slurm", "MPM_CHECKPOINT_SECONDS": "1", "MPM_SLURM_TIME_LIMIT": "10:00"})
+        try:
+            yield stack.start()
+        finally:
+            stack.stop()
+
+
+@pytest.fixture
+def api(slurm_stack):
+    with httpx.Client(base_url=slurm_stack.url, timeout=30) as client:
+        yield client
+
+
+def submit(api, scene: dict, **fields) -> dict:
+    answer = api.post("/v1/jobs", json={"scene": scene, **fields})
+    assert answer.status_code == 202, answer.text
+    return answer.json()
+
+
+def slurm_job(stack: Stack, job_id: str) -> dict[str, str]:
+    """`scontrol show job` of the job's Slurm job, as a dict."""
+    files = JobFiles(stack.data_dir / "jobs", job_id)
+    slurm_id = wait_until(lambda: (files.dir / "slurm.jobid").exists() and (files.dir / "slurm.jobid").read_text().strip(),
+                          60, "the Slurm job id")
+    out = subprocess.run(["scontrol", "show", "job", "-o", slurm_id], env=stack.env, capture_output=True,
+                         text=True, check=True).stdout
+    return {"id": slurm_id, **dict(item.split("=", 1) for item in out.split() if "=" in item)}
+
+
+def test_a_two_rank_job_runs_as_a_slurm_batch_job(api, slurm_stack, cluster):
+    job = submit(api, tiny_1d("slurm-two-ranks", end=0.05), processes=2, nodes=1)
+    assert job["processes"] == 2 and job["nodes"] == 1
+    final = wait_for_status(api, job["id"], timeout=300)
+    assert final["status"] == "succeeded", (final, cluster.logs())
+    assert final["progress"] == 1.0 and final["step"] == 50
+    batch = slurm_job(slurm_stack, job["id"])
+    assert batch["JobState"] == "COMPLETED" and batch["ExitCode"] == "0:0"
+    assert batch["NumTasks"] == "2" and batch["NumNodes"] == "1"
+    files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
+    assert "-launcher slurm -n 2" in (files.dir / "slurm.sh").read_text()
+    # both ranks were in the run: rank 0 wrote the result, with the slabs' balance of 2 ranks
+    assert api.get(f"/v1/jobs/{job['id']}/result.h5").status_code == 200
+    assert '"event": "done"' in api.get(f"/v1/jobs/{job['id']}/log").text
+
+
+def test_cancelling_a_job_scancels_its_slurm_job(api, slurm_stack):
+    job = submit(api, tiny_1d("slurm-cancel", end=3000.0))
+    wait_until(lambda: api.get(f"/v1/jobs/{job['id']}").json()["step"] > 0, 180, "steps")
+    assert slurm_job(slurm_stack, job["id"])["JobState"] == "RUNNING"
+    assert api.post(f"/v1/jobs/{job['id']}/cancel").status_code in (200, 202)
+    final = wait_for_status(api, job["id"], timeout=60)
+    assert final["status"] == "cancelled", final
+    assert slurm_job(slurm_stack, job["id"])["JobState"] == "CANCELLED"
+    wait_until(lambda: not processes_with(job["id"]), 30, "no solver process left")
+
+
+def test_a_requeued_job_resumes_from_its_checkpoint_to_the_same_bits(api, slurm_stack, cluster, tmp_path):
+    scene = tiny_1d("slurm-requeue", end=60.0)
+    job = submit(api, scene)
+    files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
+    wait_until(lambda: checkpoint_path(files.dir).exists() and api.get(f"/v1/jobs/{job['id']}").json()["step"] > 0,
+               180, "a checkpoint")
+    slurm_id = slurm_job(slurm_stack, job["id"])["id"]
+    # What a preemption with PreemptMode=REQUEUE does: SIGTERM to the job, then back to the queue
+    cluster.run("scontrol", "requeue", slurm_id)
+    wait_until(lambda: slurm_job(slurm_stack, job["id"])["JobState"] == "PENDING", 60, "the job requeued")
+    assert api.get(f"/v1/jobs/{job['id']}").json()["status"] == "running"
+    wait_until(lambda: api.get(f"/v1/jobs/{job['id']}").json()["stage"] == "queued", 30, "stage queued")
+    cluster.run("scontrol", "update", f"JobId={slurm_id}", "StartTime=now")   # Slurm holds a requeued job 2 min
+    final = wait_for_status(api, job["id"], timeout=300)
+    assert final["status"] == "succeeded", (final, files.log.read_text()[-3000:])
+    batch = slurm_job(slurm_stack, job["id"])
+    assert batch["Restarts"] == "1" and batch["JobState"] == "COMPLETED"
+    runs = [json.loads(line) for line in (files.dir / "slurm.out").read_text().splitlines() if line.startswith("{")]
+    ends = [index for index, line in enumerate(runs) if line["event"] == "done"]
+    assert len(ends) == 2 and runs[ends[0]]["reason"] == "cancelled", runs[ends[0]]   # stopped by Slurm's SIGTERM
+    # the second run went on from where the first stopped (its first line, before the checkpoint is read, says 0)
+    second_run = [line["step"] for line in runs[ends[0] + 1:ends[1]] if line["step"] > 0]
+    assert min(second_run) >= runs[ends[0]]["steps"] > 0
+    # the bits of a run never stopped
+    (tmp_path / "scene.json").write_text(json.dumps(scene))
+    subprocess.run([sys.executable, "-m", "solver", "run", str(tmp_path / "scene.json"), "-o", str(tmp_path / "ref"),
+                    "--progress", "none"], check=True, capture_output=True, timeout=600)
+    assert_same_result(tmp_path / "ref" / "result.h5", files.result)
