@@ -5,7 +5,8 @@
 - `slurm`: a Slurm batch job (worker/slurm.py), `"processes"` ranks over `"nodes"` nodes.
 
 Both answer `run(job_id, files, processes, nodes, on_progress=, should_stop=, ...)`
-with a `worker.runner.Outcome`.
+with a `worker.runner.Outcome`, and `in_flight(files)` / `stop_leftover(files)` for a
+run that goes on without a worker (a Slurm job, after its worker stopped).
 """
 from __future__ import annotations
 
@@ -19,6 +20,13 @@ from worker.runner import Outcome, ProgressLine, run_solver, solver_command
 class LocalLauncher:
     def __init__(self, settings: Settings):
         self.settings = settings
+
+    def in_flight(self, files: JobFiles) -> bool:
+        """A run of the job goes on without this worker (none does here: the solver dies with its worker)."""
+        return False
+
+    def stop_leftover(self, files: JobFiles) -> None:
+        """End a run that went on after its job ended (none does here)."""
 
     def run(self, job_id: str, files: JobFiles, processes: int = 1, nodes: int = 1, *,
             on_progress: Callable[[ProgressLine], None],

@@ -158,6 +158,15 @@ class SlurmLauncher:
         state = query_state(slurm_id, env).state.split()[0]
         return slurm_id if slurm_id and (state in ACTIVE_STATES or state == "COMPLETED") else None
 
+    def in_flight(self, files: JobFiles) -> bool:
+        return self.attached(files, None) is not None
+
+    def stop_leftover(self, files: JobFiles) -> None:
+        slurm_id = self.attached(files, None)
+        if slurm_id is not None and query_state(slurm_id).state in ACTIVE_STATES:
+            log.info("cancelling Slurm job %s: its job has ended", slurm_id)
+            self.cancel(slurm_id, None)
+
     def cancel(self, slurm_id: str, env: dict[str, str] | None) -> None:
         _run(["scancel", slurm_id], env)
 

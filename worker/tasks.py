@@ -70,6 +70,8 @@ def run_job(self, job_id: str) -> None:
     job = _retry_redis(lambda: store.get(job_id))
     if job is None or job["status"] in FINISHED:
         log.info("job skipped: finished or deleted", extra={"job_id": job_id})
+        # cancelled while back on the queue: a Slurm job left running by a stopped worker is ended
+        launcher_for(get_settings()).stop_leftover(JobFiles(get_settings().jobs_dir, job_id))
         return
     token = f"{worker}:{uuid.uuid4()}"
     if not _retry_redis(lambda: store.acquire_lease(job_id, token, get_settings().lease_seconds)):
@@ -103,9 +105,11 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     if before == "running":
         log.warning("job restarted: its worker was lost", extra={"job_id": job_id})
     resuming = checkpoint_path(files.dir).exists()
-    if not resuming:
+    launcher = launcher_for(settings)   # local, or Slurm (MPM_LAUNCHER)
+    if not resuming and not launcher.in_flight(files):   # (a Slurm job still writing there is followed)
         _clear_outputs(files)
     if _retry_redis(lambda: store.cancel_requested(job_id)):
+        launcher.stop_leftover(files)
         _retry_redis(lambda: store.transition(job_id, ["running"], "cancelled", finished_at=now_iso()))
         return
     log.info("job resumed from its checkpoint" if resuming else "job started",
@@ -144,7 +148,6 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         except redis.RedisError as exc:
             log.warning("progress not recorded: %s", exc, extra={"job_id": job_id})
 
-    launcher = launcher_for(settings)   # local, or Slurm (MPM_LAUNCHER)
     while True:
         outcome = launcher.run(
             job_id, files, job.get("processes", 1), job.get("nodes") or 1,

@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import json
 import subprocess
+import threading
 
 import pytest
+from celery.exceptions import Reject
 
 from core.models import new_job
 from core.paths import JobFiles, new_job_id
@@ -158,6 +160,46 @@ def test_a_cancel_scancels_the_batch_job(job, store, scripted):
     record = store.get(job_id)
     assert record["status"] == "cancelled" and record["step"] == 10, record
     assert cluster.cancelled == ["101"]
+
+
+def _stopped_worker(job_id, store, scripted, monkeypatch, runs):
+    """Run the job until the worker is stopped on the second poll of Slurm: the job is back on
+    the queue and its batch job left running."""
+    shutting_down = threading.Event()
+    monkeypatch.setattr(tasks, "_shutting_down", shutting_down)
+    polls = []
+
+    def stop_on_the_second_poll():
+        polls.append(1)
+        if len(polls) == 2:
+            shutting_down.set()
+    cluster = scripted(runs, on_poll=stop_on_the_second_poll)
+    with pytest.raises(Reject):
+        tasks.run_job(job_id)
+    assert store.get(job_id)["status"] == "queued" and not cluster.cancelled
+    shutting_down.clear()
+    cluster.on_poll = None
+    return cluster
+
+
+def test_the_next_worker_follows_the_batch_job_a_stopped_worker_left(job, store, scripted, monkeypatch):
+    job_id, files = job
+    cluster = _stopped_worker(job_id, store, scripted, monkeypatch,
+                              [[("RUNNING", "0:0", [PROGRESS])] * 4 + [("COMPLETED", "0:0", [DONE])]])
+    tasks.run_job(job_id)   # the next worker
+    record = store.get(job_id)
+    assert record["status"] == "succeeded" and record["step"] == 20, record
+    assert len(cluster.submitted) == 1 and not cluster.cancelled
+
+
+def test_a_job_cancelled_while_back_on_the_queue_scancels_the_batch_job_left_running(job, store, scripted,
+                                                                                     monkeypatch):
+    job_id, _ = job
+    cluster = _stopped_worker(job_id, store, scripted, monkeypatch, [[("RUNNING", "0:0", [PROGRESS])]])
+    assert store.request_cancel(job_id) == "queued"   # cancelled at once by the API
+    tasks.run_job(job_id)   # the queue's copy, taken by the next worker: skipped, its batch job ended
+    assert store.get(job_id)["status"] == "cancelled"
+    assert cluster.cancelled == ["101"] and len(cluster.submitted) == 1
 
 
 @pytest.mark.parametrize("state, exit_code, returncode, stopped, error", [
