@@ -1,10 +1,11 @@
-"""A one-host Slurm cluster for the tests: Debian's munged, slurmctld and slurmd, each
-with its own files in a temporary folder (a munge key, a socket, a slurm.conf named
-by SLURM_CONF, spool and state folders) and free ports, so that nothing of the
-machine's own /etc/slurm or /run/munge is used or changed.
+"""A one-host Slurm cluster for the tests: Debian's munged, slurmctld and slurmd (one
+per node: several nodes run on this host, as Debian's Slurm is built with
+multiple-slurmd support), each with its own files in a temporary folder (a munge key,
+a socket, a slurm.conf named by SLURM_CONF, spool and state folders) and free ports,
+so that nothing of the machine's own /etc/slurm or /run/munge is used or changed.
 
-`SlurmCluster(folder).start()` starts the three daemons and waits until the node is
-idle; `.env` is what a client (sbatch, squeue, scancel, the worker) needs; `.stop()`
+`SlurmCluster(folder, nodes=N).start()` starts the daemons and waits until the nodes
+are idle; `.env` is what a client (sbatch, squeue, scancel, the worker) needs; `.stop()`
 cancels what is left and stops them. A missing daemon raises: a test that needs
 Slurm fails where Slurm is missing (scripts/dev.py installs it), it never skips.
 """
@@ -51,9 +52,9 @@ AuthInfo=socket={munge_socket}
 StateSaveLocation={root}/state
 SlurmdSpoolDir={root}/spool/%n
 SlurmctldPidFile={root}/slurmctld.pid
-SlurmdPidFile={root}/slurmd.pid
+SlurmdPidFile={root}/slurmd-%n.pid
 SlurmctldLogFile={root}/slurmctld.log
-SlurmdLogFile={root}/slurmd.log
+SlurmdLogFile={root}/slurmd-%n.log
 ProctrackType=proctrack/linuxproc
 TaskPlugin=task/none
 JobAcctGatherType=jobacct_gather/none
@@ -71,16 +72,19 @@ SlurmdParameters=config_overrides
 SlurmctldTimeout=30
 SlurmdTimeout=30
 InactiveLimit=0
-NodeName={host} NodeAddr=127.0.0.1 CPUs={cpus} State=UNKNOWN
-PartitionName=debug Nodes={host} Default=YES MaxTime=INFINITE State=UP OverSubscribe=YES
+{node_lines}
+PartitionName=debug Nodes={node_names} Default=YES MaxTime=INFINITE State=UP OverSubscribe=YES
 """
 
 
 class SlurmCluster:
-    def __init__(self, folder: Path, cpus: int = 4):
+    def __init__(self, folder: Path, cpus: int = 4, nodes: int = 1):
+        """`nodes` > 1: that many slurmd on this host (node names n1, n2, ...), which needs a
+        Slurm built with multiple-slurmd support."""
         self.root = Path(folder)
         self.host = socket.gethostname().split(".")[0]
         self.cpus = cpus
+        self.nodes = [self.host] if nodes == 1 else [f"n{i + 1}" for i in range(nodes)]
         self.conf = self.root / "slurm.conf"
         self.munge_socket = self.root / "munge" / "munge.socket"
         self.processes: dict[str, subprocess.Popen] = {}
@@ -93,9 +97,14 @@ class SlurmCluster:
         key = self.root / "munge" / "munge.key"
         key.write_bytes(os.urandom(1024))
         key.chmod(0o600)
+        if len(self.nodes) == 1:
+            node_lines = f"NodeName={self.host} NodeAddr=127.0.0.1 CPUs={self.cpus} State=UNKNOWN"
+        else:
+            node_lines = "\n".join(f"NodeName={name} NodeHostname={self.host} NodeAddr=127.0.0.1 Port={_free_port()} "
+                                   f"CPUs={self.cpus} State=UNKNOWN" for name in self.nodes)
         self.conf.write_text(SLURM_CONF.format(
             host=self.host, ctld_port=_free_port(), slurmd_port=_free_port(), root=self.root,
-            munge_socket=self.munge_socket, cpus=self.cpus))
+            munge_socket=self.munge_socket, node_lines=node_lines, node_names=",".join(self.nodes)))
 
     def _start(self, name: str, command: list[str]) -> None:
         log = open(self.root / f"{name}.out", "ab")
@@ -124,13 +133,15 @@ class SlurmCluster:
                                f"--seed-file={munge / 'munged.seed'}", f"--log-file={munge / 'munged.log'}"])
         self._wait(lambda: self.munge_socket.exists(), timeout, "munged's socket")
         self._start("slurmctld", [binaries["slurmctld"], "-D", "-i", "-f", str(self.conf)])
-        self._start("slurmd", [binaries["slurmd"], "-D", "-f", str(self.conf), "-N", self.host])
-        self._wait(self._node_idle, timeout, "the node to be idle")
+        for name in self.nodes:
+            self._start(f"slurmd-{name}", [binaries["slurmd"], "-D", "-f", str(self.conf), "-N", name])
+        self._wait(self._nodes_idle, timeout, "the nodes to be idle")
         return self
 
-    def _node_idle(self) -> bool:
+    def _nodes_idle(self) -> bool:
         answer = subprocess.run(["sinfo", "-h", "-N", "-o", "%T"], env=self.env, capture_output=True, text=True)
-        return answer.returncode == 0 and answer.stdout.strip().startswith("idle")
+        states = answer.stdout.split()
+        return answer.returncode == 0 and len(states) == len(self.nodes) and all(s == "idle" for s in states)
 
     def _wait(self, predicate, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout

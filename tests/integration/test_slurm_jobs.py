@@ -1,7 +1,7 @@
 """Jobs on a real Slurm cluster through the whole stack (issue 53): Debian's munged,
 slurmctld and slurmd on this host (tests/slurm_cluster.py), an API and workers with
-MPM_LAUNCHER=slurm. A job runs as a batch job with its 2 ranks started by mpiexec's
-Slurm launcher, a cancel scancels it, and a job requeued by Slurm (as a preemption
+MPM_LAUNCHER=slurm. A job runs as a batch job with its 2 ranks on 2 nodes (two slurmd
+on this host) started by mpiexec's Slurm launcher, a cancel scancels it, and a job requeued by Slurm (as a preemption
 does: SIGTERM, then back to the queue) resumes from its checkpoint to the bits of a
 run never interrupted.
 
@@ -47,7 +47,7 @@ class SlurmStack(Stack):
 
 @pytest.fixture(scope="module")
 def cluster(tmp_path_factory):
-    cluster = SlurmCluster(tmp_path_factory.mktemp("slurm"))
+    cluster = SlurmCluster(tmp_path_factory.mktemp("slurm"), nodes=2)   # two slurmd on this host
     try:
         yield cluster.start()
     finally:
@@ -89,15 +89,15 @@ def slurm_job(stack: Stack, job_id: str) -> dict[str, str]:
     return {"id": slurm_id, **dict(item.split("=", 1) for item in out.split() if "=" in item)}
 
 
-def test_a_two_rank_job_runs_as_a_slurm_batch_job(api, slurm_stack, cluster):
-    job = submit(api, tiny_1d("slurm-two-ranks", end=0.05), processes=2, nodes=1)
-    assert job["processes"] == 2 and job["nodes"] == 1
+def test_a_two_rank_job_runs_as_a_slurm_batch_job_over_two_nodes(api, slurm_stack, cluster):
+    job = submit(api, tiny_1d("slurm-two-ranks", end=0.05), processes=2, nodes=2)
+    assert job["processes"] == 2 and job["nodes"] == 2
     final = wait_for_status(api, job["id"], timeout=300)
     assert final["status"] == "succeeded", (final, cluster.logs())
     assert final["progress"] == 1.0 and final["step"] == 50
     batch = slurm_job(slurm_stack, job["id"])
     assert batch["JobState"] == "COMPLETED" and batch["ExitCode"] == "0:0"
-    assert batch["NumTasks"] == "2" and batch["NumNodes"] == "1"
+    assert batch["NumTasks"] == "2" and batch["NumNodes"] == "2" and batch["NodeList"] == "n[1-2]"
     files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
     assert "-launcher slurm -n 2" in (files.dir / "slurm.sh").read_text()
     # both ranks were in the run: rank 0 wrote the result, with the slabs' balance of 2 ranks
