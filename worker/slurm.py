@@ -1,6 +1,6 @@
 """The Slurm launcher (MPM_LAUNCHER=slurm): a job's solver run as a Slurm batch job.
 
-Why `sbatch` and not slurmrestd: sbatch, squeue, scontrol, sacct and scancel are on
+Why `sbatch` and not slurmrestd: sbatch, scontrol, sacct and scancel are on
 every Slurm login node and need no extra daemon, no JWT keys and no open port; the
 worker only has to run where they work (a login or service node) and see the
 shared folder MPM_DATA_DIR.
@@ -17,19 +17,25 @@ child process, and answers the same `Outcome`:
   job's log, both appended to (a requeued run adds to them). The Slurm job id is kept
   in `slurm.jobid`, so that a worker taking the job over (after a shutdown or a
   lost worker) follows the same Slurm job instead of submitting another.
-- follow: `squeue`, then `scontrol show job` (and `sacct` once slurmctld has
-  forgotten the job) every poll, and the new lines of `slurm.out`: progress lines
+- follow: `scontrol show job` (and `sacct` once slurmctld has forgotten the job)
+  every poll, and the new lines of `slurm.out`: progress lines
   reach the job record as they do from a local run; while Slurm holds the job
   pending its stage is "queued".
-- stop: a cancel, the time limit or the disk quota `scancel` the job (Slurm sends
-  SIGTERM, then SIGKILL after its KillWait: the solver ends its step and closes the
-  result file); a worker shutting down or losing its lease leaves it running.
-- preemption, requeue, time limit: the batch job is submitted `--requeue`, so a
-  preempted (PreemptMode=REQUEUE) or node-failed job goes back to Slurm's queue
-  under the same id; Slurm's SIGTERM makes the solver write its checkpoint, and the
-  run started again resumes from it. A job ended by its Slurm time limit (TIMEOUT)
-  or preempted without requeue is submitted again, resuming from its checkpoint,
-  like a solver process killed on a local worker (MPM_MAX_ATTEMPTS bounds both).
+- stop: a cancel, MPM_MAX_JOB_SECONDS or the disk quota send SIGTERM to the solver's
+  processes only (`scancel --signal=TERM`: the batch shell for one rank, the ranks'
+  step for several, never the srun in the batch step, which answers a SIGTERM by
+  killing its ranks), so the solver ends its step and closes the result file; a
+  plain `scancel` follows after MPM_CANCEL_GRACE_SECONDS if it is still there. A
+  worker shutting down or losing its lease leaves the batch job running.
+- preemption, requeue, time limit: Slurm's SIGTERM (a preemption's GraceTime, or
+  `--signal` 120 s before the time limit) makes the solver write a checkpoint where
+  it stops and end; a run that ended so, or that Slurm ended (TIMEOUT, PREEMPTED,
+  NODE_FAIL), is submitted again and resumes from its checkpoint, like a solver
+  process killed on a local worker (MPM_MAX_ATTEMPTS bounds both). A job that Slurm
+  requeues itself (`--requeue`: `scontrol requeue`, PreemptMode=REQUEUE without
+  grace, a failed node) keeps its id and is followed on; its run started again
+  resumes from the last checkpoint (for several ranks the one of
+  MPM_CHECKPOINT_SECONDS: that SIGTERM reaches srun, which kills the ranks).
 """
 from __future__ import annotations
 
@@ -104,6 +110,7 @@ class SlurmLauncher:
     """Runs jobs as Slurm batch jobs (module docstring). One object per worker."""
 
     SCRIPT, STDOUT, JOB_ID = "slurm.sh", "slurm.out", "slurm.jobid"
+    WARNING_SECONDS = 120   # SIGTERM this long before the time limit (Slurm's resolution: 60 s)
 
     def __init__(self, settings: Settings, python: str | None = None, poll_interval: float = 1.0):
         self.settings = settings
@@ -125,7 +132,9 @@ class SlurmLauncher:
         s = self.settings
         options = [f"--job-name=mpm-{job_id[:8]}", f"--ntasks={processes}", f"--nodes={min(nodes, processes)}",
                    f"--output={files.dir / self.STDOUT}", f"--error={files.log}", "--open-mode=append",
-                   f"--chdir={files.dir}", "--requeue", "--export=ALL"]
+                   f"--chdir={files.dir}", "--requeue", "--export=ALL",
+                   # before the time limit: a stop, a checkpoint, and a run submitted again resumes
+                   f"--signal={'B:' if processes == 1 else ''}TERM@{self.WARNING_SECONDS}"]
         options += [f"--partition={s.slurm_partition}"] if s.slurm_partition else []
         options += [f"--account={s.slurm_account}"] if s.slurm_account else []
         options += [f"--time={s.slurm_time_limit}"] if s.slurm_time_limit else []
@@ -170,6 +179,13 @@ class SlurmLauncher:
     def cancel(self, slurm_id: str, env: dict[str, str] | None) -> None:
         _run(["scancel", slurm_id], env)
 
+    def stop(self, slurm_id: str, processes: int, env: dict[str, str] | None) -> None:
+        """SIGTERM to the solver's processes only: the solver itself, the batch shell, for one;
+        the ranks' step for several, not the batch step, where srun would answer a SIGTERM
+        by killing the ranks (SIGKILL) before they write their last checkpoint."""
+        where = ["--batch"] if processes == 1 else []
+        _run(["scancel", "--signal=TERM", *where, slurm_id], env)
+
     # -- one run, to its end ----------------------------------------------
     def run(self, job_id: str, files: JobFiles, processes: int = 1, nodes: int = 1, *,
             on_progress: Callable[[ProgressLine], None],
@@ -187,13 +203,14 @@ class SlurmLauncher:
                 slurm_id = self.submit(job_id, files, processes, nodes, env)
             except (SlurmError, OSError, subprocess.SubprocessError) as error:
                 return Outcome(1, None, None, f"the job could not be submitted to Slurm: {error}")
-        return self._follow(job_id, files, slurm_id, reader, on_progress, should_stop, progress_interval,
-                            timeout_seconds, env)
+        return self._follow(job_id, files, slurm_id, processes, reader, on_progress, should_stop,
+                            progress_interval, timeout_seconds, env)
 
-    def _follow(self, job_id, files, slurm_id, reader, on_progress, should_stop, progress_interval,
+    def _follow(self, job_id, files, slurm_id, processes, reader, on_progress, should_stop, progress_interval,
                 timeout_seconds, env) -> Outcome:
         started = time.monotonic()
         stopped: str | None = None
+        term_sent_at: float | None = None
         pending: ProgressLine | None = None
         last_sent = 0.0
         last_state = ""
@@ -231,8 +248,13 @@ class SlurmLauncher:
                     # Slurm runs on: the worker that takes the job next follows it (slurm.jobid)
                     return Outcome(0, None, stopped, "")
                 if stopped is not None:
-                    log.info("cancelling Slurm job %s (%s)", slurm_id, stopped, extra={"job_id": job_id})
-                    self.cancel(slurm_id, env)
+                    log.info("stopping Slurm job %s (%s)", slurm_id, stopped, extra={"job_id": job_id})
+                    self.stop(slurm_id, processes, env)
+                    term_sent_at = now
+            elif term_sent_at is not None and now - term_sent_at > self.settings.cancel_grace_seconds:
+                log.info("cancelling Slurm job %s", slurm_id, extra={"job_id": job_id})
+                self.cancel(slurm_id, env)   # SIGTERM to all, SIGKILL after Slurm's KillWait
+                term_sent_at = None
             time.sleep(self.poll_interval)
         for item in reader.read():   # the last lines, written before the job ended
             if item.get("event") != "done":
@@ -252,6 +274,11 @@ class SlurmLauncher:
             return Outcome(0, done, None, log_tail)
         if name in RESUMABLE_STATES:   # submitted again by the task, from the checkpoint
             return Outcome(-signal.SIGTERM, done, None, log_tail, lost_why=f"Slurm ended it ({name})")
+        if done is not None and done.get("reason") == "cancelled" and name != "CANCELLED":
+            # stopped by a signal that the service did not send: Slurm's, before a time limit
+            # (--signal) or a preemption's grace time; it wrote a checkpoint where it stopped
+            return Outcome(-signal.SIGTERM, done, None, log_tail,
+                           lost_why=f"Slurm stopped it (SIGTERM of a preemption or its time limit; {name})")
         if name == "CANCELLED":
             why = "the Slurm job was cancelled outside the service (scancel)"
             return Outcome(1, None, None, why)

@@ -55,7 +55,7 @@ def test_the_local_launcher_runs_a_job_as_before(job, store):
 class ScriptedSlurm:
     """sbatch, scontrol and scancel as a test writes them: each submission plays its list of
     (state, exit code, lines its output gets), one a poll, the last one for ever after;
-    a scancel ends the run CANCELLED."""
+    a scancel --signal=TERM stops the solver, a plain scancel ends the run CANCELLED."""
 
     def __init__(self, runs: list[list[tuple[str, str, list[dict]]]], on_poll=None):
         self.runs, self.on_poll = runs, on_poll
@@ -73,8 +73,11 @@ class ScriptedSlurm:
             self.playing = list(self.runs.pop(0))
             return subprocess.CompletedProcess(command, 0, f"{100 + len(self.submitted)}\n", "")
         if name == "scancel":
-            self.cancelled.append(command[-1])
-            self.playing = [("CANCELLED", "0:15", [])]
+            self.cancelled.append(" ".join(command[1:]))
+            if "--signal=TERM" in command:   # the solver stops, writes its last line, exits 3 (partial)
+                self.playing = [("FAILED", "3:0", [STOPPED])]
+            else:
+                self.playing = [("CANCELLED", "0:15", [])]
             return subprocess.CompletedProcess(command, 0, "", "")
         if name == "scontrol":
             if self.on_poll:
@@ -106,6 +109,8 @@ def scripted(monkeypatch):
 
 PROGRESS = {"event": "progress", "step": 10, "time": 0.01, "fraction": 0.5, "stage": "stepping"}
 DONE = {"event": "done", "status": "complete", "reason": "finished", "message": "", "steps": 20, "time": 0.02}
+STOPPED = {"event": "done", "status": "partial", "reason": "cancelled", "message": "stopped on request at step 10",
+           "steps": 10, "time": 0.01}
 
 
 def test_a_run_ended_by_its_slurm_time_limit_is_submitted_again_and_resumes(job, store, scripted):
@@ -124,6 +129,16 @@ def test_a_run_ended_by_its_slurm_time_limit_is_submitted_again_and_resumes(job,
     assert f"--resume {files.dir}" in script
     assert (files.dir / "slurm.jobid").read_text().strip() == "102"
     assert '"event": "done"' in files.log.read_text()
+
+
+def test_a_run_stopped_by_slurms_signal_before_its_time_limit_is_submitted_again(job, store, scripted):
+    job_id, _ = job
+    cluster = scripted([[("RUNNING", "0:0", [PROGRESS]), ("FAILED", "3:0", [STOPPED])],
+                        [("RUNNING", "0:0", []), ("COMPLETED", "0:0", [DONE])]])
+    tasks.run_job(job_id)
+    record = store.get(job_id)
+    assert record["status"] == "succeeded" and record["lost"] == 1, record
+    assert "#SBATCH --signal=B:TERM@120" in cluster.submitted[0] and len(cluster.submitted) == 2
 
 
 def test_a_failed_batch_job_fails_the_job_with_its_exit_code(job, store, scripted):
@@ -159,7 +174,7 @@ def test_a_cancel_scancels_the_batch_job(job, store, scripted):
     tasks.run_job(job_id)
     record = store.get(job_id)
     assert record["status"] == "cancelled" and record["step"] == 10, record
-    assert cluster.cancelled == ["101"]
+    assert cluster.cancelled == ["--signal=TERM --batch 101"]   # the solver only: it ends its step, closes its file
 
 
 def _stopped_worker(job_id, store, scripted, monkeypatch, runs):
