@@ -73,7 +73,10 @@ SlurmctldTimeout=30
 SlurmdTimeout=30
 InactiveLimit=0
 {node_lines}
-PartitionName=debug Nodes={node_names} Default=YES MaxTime=INFINITE State=UP OverSubscribe=YES
+PreemptType=preempt/partition_prio
+PreemptMode=REQUEUE
+PartitionName=debug Nodes={node_names} Default=YES MaxTime=INFINITE State=UP PriorityTier=1 GraceTime=30
+PartitionName=urgent Nodes={node_names} MaxTime=INFINITE State=UP PriorityTier=2 PreemptMode=OFF
 """
 
 
@@ -139,9 +142,9 @@ class SlurmCluster:
         return self
 
     def _nodes_idle(self) -> bool:
-        answer = subprocess.run(["sinfo", "-h", "-N", "-o", "%T"], env=self.env, capture_output=True, text=True)
-        states = answer.stdout.split()
-        return answer.returncode == 0 and len(states) == len(self.nodes) and all(s == "idle" for s in states)
+        answer = subprocess.run(["sinfo", "-h", "-N", "-o", "%N %T"], env=self.env, capture_output=True, text=True)
+        states = dict(line.split() for line in answer.stdout.splitlines() if line.strip())   # a line a partition
+        return answer.returncode == 0 and sorted(states) == sorted(self.nodes) and set(states.values()) == {"idle"}
 
     def _wait(self, predicate, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout

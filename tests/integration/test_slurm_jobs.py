@@ -14,7 +14,9 @@ import subprocess
 import sys
 import time
 
+import h5py
 import httpx
+import numpy as np
 import pytest
 
 from core.paths import JobFiles
@@ -22,6 +24,7 @@ from service.embedded_redis import EmbeddedRedis
 from service_support import Stack, processes_with, wait_for_status, wait_until
 from tests.slurm_cluster import SlurmCluster
 from solver.checkpoint import checkpoint_path
+from solver.results import read_frame
 from tests.same_result import assert_same_result
 
 
@@ -100,19 +103,26 @@ def test_a_two_rank_job_runs_as_a_slurm_batch_job_over_two_nodes(api, slurm_stac
     assert batch["NumTasks"] == "2" and batch["NumNodes"] == "2" and batch["NodeList"] == "n[1-2]"
     files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
     assert "-launcher slurm -n 2" in (files.dir / "slurm.sh").read_text()
-    # both ranks were in the run: rank 0 wrote the result, with the slabs' balance of 2 ranks
     assert api.get(f"/v1/jobs/{job['id']}/result.h5").status_code == 200
     assert '"event": "done"' in api.get(f"/v1/jobs/{job['id']}/log").text
 
 
-def test_cancelling_a_job_scancels_its_slurm_job(api, slurm_stack):
-    job = submit(api, tiny_1d("slurm-cancel", end=3000.0))
+@pytest.mark.parametrize("processes", [1, 2], ids=["one-rank", "two-ranks-two-nodes"])
+def test_cancelling_a_job_stops_its_solver_cleanly(api, slurm_stack, processes):
+    job = submit(api, tiny_1d(f"slurm-cancel-{processes}", end=3000.0), processes=processes, nodes=processes)
     wait_until(lambda: api.get(f"/v1/jobs/{job['id']}").json()["step"] > 0, 180, "steps")
     assert slurm_job(slurm_stack, job["id"])["JobState"] == "RUNNING"
     assert api.post(f"/v1/jobs/{job['id']}/cancel").status_code in (200, 202)
     final = wait_for_status(api, job["id"], timeout=60)
     assert final["status"] == "cancelled", final
-    assert slurm_job(slurm_stack, job["id"])["JobState"] == "CANCELLED"
+    # SIGTERM to the solver or its ranks (scancel --signal=TERM): they end the step in flight, rank 0 closes
+    # the result file as partial, and the batch job ends with the solver's exit code for that
+    batch = slurm_job(slurm_stack, job["id"])
+    assert (batch["JobState"], batch["ExitCode"]) == ("FAILED", "3:0"), batch
+    files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
+    with h5py.File(files.result, "r") as result:
+        assert result.attrs["status"] == "partial" and len(result["frames"]) >= 1
+    assert '"reason": "cancelled"' in api.get(f"/v1/jobs/{job['id']}/log").text
     wait_until(lambda: not processes_with(job["id"]), 30, "no solver process left")
 
 
@@ -139,8 +149,41 @@ def test_a_requeued_job_resumes_from_its_checkpoint_to_the_same_bits(api, slurm_
     # the second run went on from where the first stopped (its first line, before the checkpoint is read, says 0)
     second_run = [line["step"] for line in runs[ends[0] + 1:ends[1]] if line["step"] > 0]
     assert min(second_run) >= runs[ends[0]]["steps"] > 0
-    # the bits of a run never stopped
-    (tmp_path / "scene.json").write_text(json.dumps(scene))
-    subprocess.run([sys.executable, "-m", "solver", "run", str(tmp_path / "scene.json"), "-o", str(tmp_path / "ref"),
+    assert_same_result(reference(scene, tmp_path), files.result)   # the bits of a run never stopped
+
+
+def reference(scene: dict, folder) -> object:
+    """The result of the scene run on one process, never stopped."""
+    (folder / "scene.json").write_text(json.dumps(scene))
+    subprocess.run([sys.executable, "-m", "solver", "run", str(folder / "scene.json"), "-o", str(folder / "ref"),
                     "--progress", "none"], check=True, capture_output=True, timeout=600)
-    assert_same_result(tmp_path / "ref" / "result.h5", files.result)
+    return folder / "ref" / "result.h5"
+
+
+def test_a_preempted_two_rank_job_stops_with_a_checkpoint_and_resumes(api, slurm_stack, cluster, tmp_path):
+    """A job of a higher partition (PriorityTier) needing both nodes preempts the 2-rank job
+    (PreemptMode=REQUEUE, GraceTime=30): Slurm sends SIGTERM to its ranks, which end the
+    step in flight and write the checkpoint of all; the run is submitted again and resumes.
+    The resumed run cuts its slabs afresh, so its sums of ghost contributions come in
+    another order: the equivalence tests' tolerance against one process
+    (tests/parallel/test_checkpoint_ranks.py), not the same bits."""
+    scene = tiny_1d("slurm-preempted", end=40.0)
+    job = submit(api, scene, processes=2, nodes=2)
+    files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
+    wait_until(lambda: api.get(f"/v1/jobs/{job['id']}").json()["step"] > 0, 180, "steps")
+    first = slurm_job(slurm_stack, job["id"])["id"]
+    cluster.run("sbatch", "--partition=urgent", "--nodes=2", "--exclusive", f"--output={tmp_path / 'urgent.out'}",
+                "--wrap", "sleep 2")
+    final = wait_for_status(api, job["id"], timeout=300)
+    assert final["status"] == "succeeded", (final, files.log.read_text()[-3000:])
+    assert final["lost"] == 1 and slurm_job(slurm_stack, job["id"])["id"] != first   # submitted again
+    runs = [json.loads(line) for line in (files.dir / "slurm.out").read_text().splitlines() if line.startswith("{")]
+    ends = [index for index, line in enumerate(runs) if line["event"] == "done"]
+    assert len(ends) == 2 and runs[ends[0]]["reason"] == "cancelled", runs[ends[0]]   # stopped by Slurm's SIGTERM
+    second_run = [line["step"] for line in runs[ends[0] + 1:ends[1]] if line["step"] > 0]
+    assert min(second_run) >= runs[ends[0]]["steps"] > 0   # from the checkpoint written where it stopped
+    want, got = read_frame(reference(scene, tmp_path), -1), read_frame(files.result, -1)
+    assert got["step"] == want["step"] == 40000
+    for field in ("position", "velocity"):
+        a, b = want["fields"][field], got["fields"][field]
+        assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a)), (field, np.max(np.abs(a - b)) / np.max(np.abs(a)))
