@@ -160,8 +160,12 @@ class SlurmCluster:
 
     def stop(self) -> None:
         if "slurmctld" in self.processes and self.processes["slurmctld"].poll() is None:
+            # the jobs' processes end before their slurmd (a slurmstepd outlives a stopped slurmd)
             subprocess.run(["scancel", "--full", "--user", "root"], env=self.env, capture_output=True)
-            time.sleep(1)
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline and subprocess.run(
+                    ["squeue", "-h", "-o", "%i"], env=self.env, capture_output=True, text=True).stdout.strip():
+                time.sleep(0.5)
         for name in reversed(list(self.processes)):
             process = self.processes[name]
             if process.poll() is None:

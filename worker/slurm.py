@@ -73,7 +73,11 @@ class SlurmState:
 
 
 def _run(command: list[str], env: dict[str, str] | None) -> subprocess.CompletedProcess:
-    return subprocess.run(command, env=env, capture_output=True, text=True, timeout=60)
+    """A Slurm command; one that cannot run or hangs (a slurmctld away) answers as failed."""
+    try:
+        return subprocess.run(command, env=env, capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.SubprocessError) as error:
+        return subprocess.CompletedProcess(command, -1, "", str(error))
 
 
 def parse_exit_code(text: str) -> tuple[int, int]:
@@ -111,6 +115,7 @@ class SlurmLauncher:
 
     SCRIPT, STDOUT, JOB_ID = "slurm.sh", "slurm.out", "slurm.jobid"
     WARNING_SECONDS = 120   # SIGTERM this long before the time limit (Slurm's resolution: 60 s)
+    UNKNOWN_SECONDS = 600   # Slurm answering nothing of the job this long: the run is taken as lost
 
     def __init__(self, settings: Settings, python: str | None = None, poll_interval: float = 1.0):
         self.settings = settings
@@ -233,7 +238,7 @@ class SlurmLauncher:
                 pending, last_sent = None, now
             if state.state == "UNKNOWN":   # a slurmctld restarting: waited out for a while
                 unknown_since = unknown_since or now
-                if now - unknown_since > max(60.0, 10 * self.poll_interval):
+                if now - unknown_since > max(self.UNKNOWN_SECONDS, 10 * self.poll_interval):
                     break
             elif state.state.split()[0] not in ACTIVE_STATES:
                 break
