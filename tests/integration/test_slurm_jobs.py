@@ -187,3 +187,22 @@ def test_a_preempted_two_rank_job_stops_with_a_checkpoint_and_resumes(api, slurm
     for field in ("position", "velocity"):
         a, b = want["fields"][field], got["fields"][field]
         assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a)), (field, np.max(np.abs(a - b)) / np.max(np.abs(a)))
+
+
+def test_a_worker_stopped_mid_job_leaves_its_batch_job_running_for_the_next_worker(api, slurm_stack):
+    job = submit(api, tiny_1d("slurm-worker-stopped", end=40.0))
+    files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
+    running = wait_until(lambda: (r := api.get(f"/v1/jobs/{job['id']}").json())["step"] > 0 and r, 180, "steps")
+    first = slurm_job(slurm_stack, job["id"])["id"]
+    index = [w.name for w in slurm_stack.workers].index(f"worker{running['worker'].split('@')[0][1:]}")
+    try:
+        slurm_stack.workers[index].stop()   # SIGTERM: the job goes back to the queue, its batch job runs on
+        final = wait_for_status(api, job["id"], timeout=240)
+    finally:
+        slurm_stack.restart_worker(running["worker"])
+    assert final["status"] == "succeeded", (final, files.log.read_text()[-3000:])
+    assert final["worker"] != running["worker"] and final["lost"] == 0
+    batch = slurm_job(slurm_stack, job["id"])
+    assert batch["id"] == first and batch["Restarts"] == "0"   # followed, not submitted again
+    done = [line for line in (files.dir / "slurm.out").read_text().splitlines() if '"event": "done"' in line]
+    assert len(done) == 1 and '"status": "complete"' in done[0]   # one run, never stopped
