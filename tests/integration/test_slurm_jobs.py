@@ -1,9 +1,10 @@
 """Jobs on a real Slurm cluster through the whole stack (issue 53): Debian's munged,
 slurmctld and slurmd on this host (tests/slurm_cluster.py), an API and workers with
 MPM_LAUNCHER=slurm. A job runs as a batch job with its 2 ranks on 2 nodes (two slurmd
-on this host) started by mpiexec's Slurm launcher, a cancel scancels it, and a job requeued by Slurm (as a preemption
-does: SIGTERM, then back to the queue) resumes from its checkpoint to the bits of a
-run never interrupted.
+on this host) started by mpiexec's Slurm launcher; a cancel stops the solver cleanly;
+a job requeued by Slurm resumes from its checkpoint to the bits of a run never
+interrupted; a preempted 2-rank job stops with a checkpoint and resumes; a worker
+stopped mid-job leaves its batch job to the next worker.
 
 Nothing here skips: without Slurm installed the cluster fixture raises (scripts/dev.py
 installs Debian's packages)."""
