@@ -17,6 +17,23 @@ evaluated: for linear (and B-spline) functions it is the particle's radius at
 the start of the step, and a velocity v_r = a r gives L_thth = a exactly.
 r_I is taken from the node's index in the whole grid, so that a process holding
 a slab of it computes the same radii as one process, bit for bit.
+
+Total-Lagrangian MPM (solver/step/formulation.py): neither the review nor the
+Karamelo paper writes it out; it is Appendix G's weak form pulled back to the
+reference configuration of 2.6 (the hoop component of Grad w is w_r / R, that of
+F is r / R). The weights are at X_p, so the radius they give is the reference
+radius R_p = sum_I N_I(X_p) R_I, and
+
+- V0_p = 2 pi R_p A_p (the ring of the reference cross-section, as above);
+- the hoop component of the deformation gradient is F_thth = r_p / R_p, integrated
+  as the in-plane block is: F_dot_thth = sum_I N_I(X_p) v_rI / R_p (the hoop
+  component of Grad v), F_thth <- F_thth + dt F_dot_thth, L_thth = F_dot_thth / F_thth;
+  V = det(F_rz) F_thth V0;
+- the radial internal force gets -V0_p P_thth N_I(X_p) / R_p, with the first
+  Piola-Kirchhoff stress's P_thth = J sigma_thth / F_thth (F is block diagonal).
+
+The same kernel adds both formulations' hoop force: the formulation says which
+volume and stress (`hoop_measure`), the stencil's weights which radius.
 """
 from __future__ import annotations
 
@@ -54,15 +71,33 @@ def hoop_kinematics(spec, idx, w, lower_r, h_r, nodes_r, first_r, v_grid, dt, L,
     n = w.shape[0]
     nodes = spec[1]
     for p in prange(n):   # no scratch, each particle its own rows
-        nk = len(nodes)
-        r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
-        vr = 0.0
-        for k in range(nk):
-            vr += w[p, k] * v_grid[idx[p, k], 0]
-        rate = vr / r
+        rate = _hoop_rate(idx, w, p, len(nodes), lower_r, h_r, nodes_r, first_r, v_grid)
         L[p, 2, 2] = rate
         F[p, 2, 2] *= 1.0 + dt * rate
         volume[p] *= 1.0 + dt * rate   # the kinematics kernel took det F with the old F_thth
+
+
+@njit(parallel=True, cache=True)
+def hoop_kinematics_reference(spec, idx, w, lower_r, h_r, nodes_r, first_r, v_grid, dt, L, F, volume):
+    """TLMPM: F_dot_thth = sum_I N_I(X_p) v_rI / R_p, F_thth += dt F_dot_thth,
+    L_thth = F_dot_thth / F_thth; the volume, det(F_rz) V0 from the in-plane kernel, times F_thth."""
+    n = w.shape[0]
+    nodes = spec[1]
+    for p in prange(n):
+        rate = _hoop_rate(idx, w, p, len(nodes), lower_r, h_r, nodes_r, first_r, v_grid)
+        F[p, 2, 2] += dt * rate
+        L[p, 2, 2] = rate / F[p, 2, 2]
+        volume[p] *= F[p, 2, 2]
+
+
+@njit(cache=True)
+def _hoop_rate(idx, w, p, nk, lower_r, h_r, nodes_r, first_r, v_grid):
+    """sum_I N_I v_rI / r_p at the weights' position: L_thth (ULMPM), F_dot_thth (TLMPM)."""
+    r = _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
+    vr = 0.0
+    for k in range(nk):
+        vr += w[p, k] * v_grid[idx[p, k], 0]
+    return vr / r
 
 
 @njit(cache=True)
@@ -80,6 +115,7 @@ class Axisymmetry:
 
     def __init__(self, scene, particles):
         self._lower_r, self._h_r = float(scene.grid_lower()[0]), float(scene.cell_sizes()[0])
+        self._hoop_kinematics = hoop_kinematics_reference if scene.method.formulation == "tlmpm" else hoop_kinematics
         ring = 2.0 * math.pi * particles.x[:, 0]
         for name in ("mass", "volume", "volume0"):
             getattr(particles, name)[:] *= ring
@@ -97,10 +133,11 @@ class Axisymmetry:
 
     def after_forces(self, sim) -> None:
         """The hoop stress's nodal force."""
-        s, p = sim.stencil, sim.particles
-        add_hoop_force(sim.spec, s.idx, s.w, *self._r, p.volume, p.stress, sim.grid.force, sim.copies.force)
+        s = sim.stencil
+        volume, stress = sim.formulation.hoop_measure(sim)   # V_p, sigma_p (ULMPM); V0_p, P_p (TLMPM)
+        add_hoop_force(sim.spec, s.idx, s.w, *self._r, volume, stress, sim.grid.force, sim.copies.force)
 
     def after_kinematics(self, sim, dt: float, v_grid) -> None:
         """The hoop components of L and F, and the volume with them."""
         s, p = sim.stencil, sim.particles
-        hoop_kinematics(sim.spec, s.idx, s.w, *self._r, v_grid, dt, p.L, p.F, p.volume)
+        self._hoop_kinematics(sim.spec, s.idx, s.w, *self._r, v_grid, dt, p.L, p.F, p.volume)

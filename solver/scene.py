@@ -912,9 +912,10 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
                 problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
                 grid_ok = False
 
-    if scene.axisymmetric and scene.method.formulation == "tlmpm":
-        problems.append(("axisymmetric", "axisymmetric scenes need formulation 'ulmpm' for now "
-                         "(the hoop terms are in the update-Lagrangian step)"))
+    if scene.axisymmetric and scene.method.formulation == "tlmpm" and scene.grid.lower is None:
+        # (tlmpm's default grid is the bodies' box padded by two cells: it would reach r < 0)
+        problems.append(("grid.lower", "required with formulation 'tlmpm' in an axisymmetric scene (with "
+                         "lower[0] = 0 the axis r = 0 is a grid line whose nodes get v_r = 0)"))
 
     length_ok("gravity", scene.gravity)
     if length_ok("body_force", scene.body_force):

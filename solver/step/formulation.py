@@ -41,6 +41,12 @@ class UpdatedLagrangian:
         return kernels.update_kinematics(sim.spec, s.idx, s.dw, v_grid, dt, p.L, p.F, p.volume, p.volume0,
                                          sim.threads, kernels.flag(self.reference))
 
+    def hoop_measure(self, sim) -> tuple[np.ndarray, np.ndarray]:
+        """The volume and stress of the axisymmetric hoop force (solver/axisymmetric.py):
+        V_p and sigma_p, with N_I(x_p) / r_p."""
+        p = sim.particles
+        return p.volume, p.stress
+
     def time_step_factor(self, sim) -> float:
         return 1.0
 
@@ -54,12 +60,28 @@ class TotalLagrangian(UpdatedLagrangian):
         return particles.X
 
     def place_particles(self, particles) -> None:
-        self.piola = np.zeros((particles.count, particles.dimension, particles.dimension))
+        self.piola = np.zeros(particles.F.shape)   # (axisymmetric: 3x3, index 2 theta, as F)
 
     def force_measure(self, sim) -> tuple[np.ndarray, np.ndarray]:
         p = sim.particles
         first_piola(p.F, p.stress, self.piola, sim.threads)   # P = J sigma F^-T
         return p.volume0, self.piola
+
+    def kinematics(self, sim, v_grid: np.ndarray, dt: float) -> int:
+        """As ULMPM's; in an axisymmetric scene (F 3x3 in 2D) on the in-plane block of F and L,
+        V = det(F_rz) V0, which the hoop hook completes with F_thth (solver/axisymmetric.py):
+        F is block diagonal there, so the in-plane L = F_dot F^-1 needs only that block."""
+        p, s = sim.particles, sim.stencil
+        F, L, dim = p.F, p.L, p.dimension
+        if F.shape[1] > dim:
+            F, L = F[:, :dim, :dim], L[:, :dim, :dim]
+        return kernels.update_kinematics(sim.spec, s.idx, s.dw, v_grid, dt, L, F, p.volume, p.volume0,
+                                         sim.threads, kernels.flag(self.reference))
+
+    def hoop_measure(self, sim) -> tuple[np.ndarray, np.ndarray]:
+        """V0_p = 2 pi R_p A_p and P_p (its P_thth = J sigma_thth / F_thth), with N_I(X_p) / R_p:
+        the P of this step's force_measure."""
+        return sim.particles.volume0, self.piola
 
     def time_step_factor(self, sim) -> float:
         """The smallest principal stretch of any particle (at most 1). The reference cells

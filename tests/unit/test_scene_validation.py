@@ -215,6 +215,16 @@ def test_every_formulation_axisymmetry_and_rigid_bodies_run_on_several_processes
     assert load_scene(scene).parallel.processes == 2
 
 
+def test_tlmpm_axisymmetric_scene_is_valid_with_a_grid_from_the_axis():
+    scene = changed(two_disks, "axisymmetric", True)
+    scene["method"]["formulation"], scene["grid"]["lower"][0] = "tlmpm", 0.0
+    loaded = load_scene(scene)
+    assert loaded.axisymmetric and loaded.method.formulation == "tlmpm"
+    del scene["grid"]["lower"]   # tlmpm's default grid would reach past the axis
+    errors = errors_of(scene)
+    assert any(e["path"] == "grid.lower" and "axisymmetric" in e["message"] for e in errors), errors
+
+
 def test_defaults():
     scene = load_scene(block_3d())
     assert (scene.method.formulation, scene.method.scheme, scene.method.shape_function, scene.method.transfer) == (

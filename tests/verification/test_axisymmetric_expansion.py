@@ -8,6 +8,10 @@ sigma_rr = sigma_thth: the hoop force and the hoop rate of eq. G.2 / G.4 must bo
 right. With D_rr = D_thth = A / (1 + A t) the hypoelastic stress is exactly
 sigma_rr = sigma_thth = 2 (lambda + mu) ln(1 + A t), sigma_zz = 2 lambda ln(1 + A t).
 A plane-strain run of the same scene (no hoop terms) is far from it.
+
+The same in TLMPM (the hoop terms in the reference configuration, solver/axisymmetric.py):
+F_thth = r / R = 1 + A t, P_thth = J sigma_thth / F_thth and the hoop force with N_I(X_p) / R_p.
+There the surface nodes are material points: they move at the constant A R.
 """
 import math
 
@@ -23,8 +27,8 @@ END = 2 * (B - R_IN) / C               # one wave round trip
 A = STRAIN / END
 
 
-def expansion_scene(axisymmetric=True):
-    return {
+def expansion_scene(axisymmetric=True, formulation="ulmpm"):
+    scene = {
         "name": "radial-expansion", "dimension": 2, "axisymmetric": axisymmetric,
         "grid": {"lower": [0.0, 0.0], "upper": [B + CELL, HZ], "cell_size": CELL},
         "materials": {"m": {"model": "linear_elastic", "density": RHO, "youngs_modulus": E, "poisson_ratio": NU}},
@@ -40,6 +44,11 @@ def expansion_scene(axisymmetric=True):
         "time": {"end": END, "cfl": 0.5},
         "output": {"frames": 2, "fields": ["position", "stress"]},
     }
+    if formulation == "tlmpm":   # the nodes are those of the reference grid: the surface's at R move at A R
+        scene["method"] = {"formulation": "tlmpm"}
+        for condition, r in zip(scene["boundary_conditions"][2:], (R_IN, B)):
+            condition["velocity"] = [A * r, None]
+    return scene
 
 
 def stresses(case):
@@ -73,3 +82,21 @@ def test_plane_strain_is_not_the_axisymmetric_solution(run_case):
     exact_rr = 2 * (LAM + MU) * math.log(1 + STRAIN)
     # without the hoop rate sigma_zz (the out-of-plane stress) is lambda eps only: ~ half of it
     assert np.abs(stress[:, 2] / exact_rr - 1).mean() > 0.3
+
+
+def test_uniform_expansion_is_exact_in_tlmpm(run_case):
+    case = run_case(expansion_scene(formulation="tlmpm"), "axisymmetric-tlmpm")
+    x0, x1, stress = stresses(case)
+    log = math.log(1 + STRAIN)
+    exact_rr, exact_zz = 2 * (LAM + MU) * log, 2 * LAM * log
+    # The reference grid's nodes are material points and the surface ones are prescribed
+    # exactly, so no imbalance travels and reflects as in ULMPM: what remains is the 2 pi R
+    # weighting of the nodal velocity, <= 0.19 % in L (above). Measured: 0.04 % at most. The
+    # bound of 0.2 % tells the hoop force's measure: with V_p sigma_thth in place of
+    # V0_p P_thth (1 % apart at this strain: P_thth = J sigma_thth / F_thth) the stresses are
+    # 0.4 % off; without the hoop force 40 %.
+    assert np.allclose(stress[:, 0], exact_rr, rtol=0.002)          # sigma_rr
+    assert np.allclose(stress[:, 2], exact_rr, rtol=0.002)          # sigma_thth: the hoop rate and F_thth = r / R
+    assert np.allclose(stress[:, 1], exact_zz, rtol=0.002)          # sigma_zz
+    assert np.allclose(stress[:, 3:], 0.0, atol=0.002 * exact_rr)
+    assert np.allclose(x1[:, 0], x0[:, 0] * (1 + STRAIN), rtol=0.002 * STRAIN)
