@@ -4,7 +4,8 @@
 
 Runs the axisymmetric Taylor bar of tests/verification/taylor_bar.py at cells of
 0.4 and 0.2 mm (2 x 2 particles per cell) with linear hat functions and with
-cubic B-splines, and with --3d the 3D quarter bar at 0.8 and 0.3 mm (2 x 2 x 2, ULMPM)
+cubic B-splines, in axisymmetric TLMPM (linear, one particle per cell) at 0.4 and
+0.2 mm, and with --3d the 3D quarter bar at 0.8 and 0.3 mm (2 x 2 x 2, ULMPM)
 and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: linear, one particle
 per cell) at cells of 0.508 and 0.254 mm, and prints the "Taylor bar" table of docs/benchmarks.md:
 length, impact-face diameter and bulge, the error measure of [R] eq. 6.19, steps,
@@ -36,6 +37,11 @@ def ulmpm(dim: int, cell: float, ppc: int, shape: str) -> tuple[str, dict, float
     return f"ULMPM {label}, {shape}, cell {cell * 1e3:g} mm, {ppc}^{dim} ppc", scene, cell / ppc
 
 
+def tlmpm_axisymmetric(cell: float) -> tuple[str, dict, float]:
+    return f"TLMPM axisymmetric, linear, cell {cell * 1e3:g} mm, 1 ppc", \
+        taylor_scene(cell, 1, 2, frames=2, formulation="tlmpm"), cell
+
+
 def tlmpm_3d(cell: float) -> tuple[str, dict, float]:
     """examples/taylor_bar_3d_tlmpm.json at another cell size, the reference grid still just
     covering the bar (L0 / cell whole cells long: cell 0.254 mm seeds the 25.4 mm exactly,
@@ -49,6 +55,7 @@ def tlmpm_3d(cell: float) -> tuple[str, dict, float]:
 
 def main() -> int:
     runs = [ulmpm(2, cell, 2, shape) for shape in ("linear", "cubic_bspline") for cell in (0.4e-3, 0.2e-3)]
+    runs += [tlmpm_axisymmetric(0.4e-3), tlmpm_axisymmetric(0.2e-3)]
     if "--3d" in sys.argv:
         runs += [ulmpm(3, 0.8e-3, 2, "linear"), ulmpm(3, 0.3e-3, 2, "linear"),
                  tlmpm_3d(0.508e-3), tlmpm_3d(0.254e-3)]
@@ -61,6 +68,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for shape in ("linear", "cubic_bspline"):    # compile outside the timings
             run(ulmpm(2, 0.8e-3, 1, shape)[1] | {"time": {"end": 2e-6}}, Path(tmp) / f"warm-{shape}")
+        run(tlmpm_axisymmetric(0.8e-3)[1] | {"time": {"end": 2e-6}}, Path(tmp) / "warm-tlmpm")
         for i, (label, scene, spacing) in enumerate(runs):
             start = time.perf_counter()
             case = Case(run(scene, Path(tmp) / f"bar{i}"))

@@ -32,9 +32,11 @@ COPPER = {
 }
 
 
-def taylor_scene(cell: float, ppc: int = 2, dimension: int = 2, end: float = END, frames: int = 5) -> dict:
+def taylor_scene(cell: float, ppc: int = 2, dimension: int = 2, end: float = END, frames: int = 5,
+                 formulation: str = "ulmpm") -> dict:
     """dimension 2: axisymmetric (x = r, y = z); 3: a quarter of the bar (slip walls on the
-    symmetry planes x = 0 and z = 0), axis along y. The grid reaches r = 2.4 R0."""
+    symmetry planes x = 0 and z = 0), axis along y. The grid reaches r = 2.4 R0 (with tlmpm
+    the reference grid: the cells beyond the bar stay empty)."""
     reach = 2.4 * R0
     if dimension == 2:
         grid = {"lower": [0.0, 0.0], "upper": [reach, L0 + cell], "cell_size": cell}
@@ -49,9 +51,9 @@ def taylor_scene(cell: float, ppc: int = 2, dimension: int = 2, end: float = END
     velocity = [0.0] * dimension
     velocity[1] = -V0
     return {
-        "name": f"taylor-bar-{'axisymmetric' if dimension == 2 else '3d'}", "dimension": dimension,
-        "axisymmetric": dimension == 2,
-        "method": {"formulation": "ulmpm", "scheme": "musl", "shape_function": "linear", "transfer": "flip",
+        "name": f"taylor-bar-{'axisymmetric' if dimension == 2 else '3d'}{'-tlmpm' if formulation == 'tlmpm' else ''}",
+        "dimension": dimension, "axisymmetric": dimension == 2,
+        "method": {"formulation": formulation, "scheme": "musl", "shape_function": "linear", "transfer": "flip",
                    "flip_ratio": 0.99},
         "grid": grid,
         "materials": {"copper": COPPER},
