@@ -76,6 +76,29 @@ def test_every_imported_example_runs_a_few_steps(path):
     assert np.any(sim.particles.x != x0)   # every file loads or moves its bodies
 
 
+def test_karamelos_tlmpm_taylor_bar_imports_in_tlmpm_and_runs():
+    """Karamelo's TLMPM Taylor bar (examples/Taylor-bar/cylindrical/TLMPM/ in its repository, a
+    3D cylinder like the ULMPM file here) differs from the ULMPM file in three lines: the method,
+    the wall at the bar's end (x_wall = hLx: the reference grid ends there) and the wall's node
+    group from half a cell before it. It imports as a 3D tlmpm scene and runs (cells twice as large)."""
+    text = (DATA / "Taylor-bar__cylindrical__ULMPM__cylindrical_taylor_bar.mpm").read_text()
+    for ulmpm, tlmpm in (("method(ulmpm, FLIP, linear, FLIP)", "method(tlmpm, FLIP, linear, FLIP)"),
+                         ("x_wall = hLx + 3*cellsize", "x_wall = hLx"),
+                         ("x_wall - cellsize, INF", "x_wall - 0.5*cellsize, INF"),
+                         ("N        = 4", "N        = 2")):
+        assert ulmpm in text
+        text = text.replace(ulmpm, tlmpm)
+    translation = translate(text, name="cylindrical_taylor_bar_tlmpm")
+    scene = load_scene(translation.scene)
+    assert scene.method.formulation == "tlmpm" and scene.dimension == 3 and not scene.axisymmetric
+    sim = make_simulation(scene)
+    assert sim.constraints.node.size == 31 * 31   # the wall: the reference grid's last node layer, x = hLx
+    x0 = sim.particles.x.copy()
+    for _ in range(3):
+        sim.advance(sim.stable_time_step(scene.time.cfl))
+    assert np.all(np.isfinite(sim.particles.x)) and np.any(sim.particles.x != x0)
+
+
 def test_what_the_files_stop_on_or_note_is_named():
     with pytest.raises(KarameloError) as caught:
         translate_file(DATA / "Vertical_bar__ULMPM__vertical_bar.mpm")
