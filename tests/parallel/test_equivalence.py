@@ -38,6 +38,7 @@ CASES = {
     "3d-musl": scene(SCENE_3D),
     "rigid": scene(RIGID_2D),
     "axisymmetric": scene(AXISYMMETRIC),
+    "axisymmetric-tlmpm": scene(AXISYMMETRIC, method__formulation="tlmpm"),   # slabs of the reference radii
     "tlmpm": scene(TLMPM_2D),
     "heat": scene(HEAT_2D),
     # F-bar's cell sums cross the slab boundaries (solver/fbar.py)
@@ -71,7 +72,7 @@ CASES = {
         [0.42, 0.19], [0.5, 0.19], [0.5, 0.3]]}, "velocity": ["0.5 * t", -0.2], "stiffness": 1.0, "friction": 0.1}]),
 }
 RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
-        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("tlmpm", 2), ("tlmpm", 3),
+        ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("axisymmetric-tlmpm", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2), ("contact-density", 2), ("contact-density", 3),
         ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2), ("tools", 2), ("tools-tlmpm", 2)]
