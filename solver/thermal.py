@@ -314,8 +314,13 @@ class Conduction:
         thermal_kernels.hold(self.held.node, self.held.value, self.n_nodes, self.T_new)
         sim.domain.share_nodes(self.T_new)
         if self.reference:
-            thermal_kernels.reference_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], p.F,
-                                           x["heat_flux"], x["nominal_heat_flux"], sim.threads)
+            F, dim = p.F, p.dimension
+            hoop = F.shape[1] > dim   # axisymmetric (F 3x3, block diagonal): the in-plane block, and J times F_thth
+            thermal_kernels.reference_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"],
+                                           F[:, :dim, :dim] if hoop else F, x["heat_flux"], x["nominal_heat_flux"],
+                                           sim.threads)
+            if hoop:
+                x["nominal_heat_flux"] *= F[:, 2, 2, None]
         elif not fused:
             thermal_kernels.particle_flux(sim.spec, s.idx, s.dw, self.T_new, x["conductivity"], x["heat_flux"],
                                           sim.threads)

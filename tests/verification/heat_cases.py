@@ -141,9 +141,10 @@ def flux_balance(dim: int, flux=5.0, coefficient: float = 2.0, steps: int = 200)
 R_IN, R_OUT = 1.0, 2.0
 
 
-def tube_scene(axisymmetric: bool, cell: float = 0.05, end: float = 1.0) -> dict:
+def tube_scene(axisymmetric: bool, cell: float = 0.05, end: float = 1.0, formulation: str = "ulmpm") -> dict:
     """A thick tube's wall r in [1, 2] (a slice of height 0.2), the inner wall held at 0, the outer at 1."""
-    return {"dimension": 2, "axisymmetric": axisymmetric, "method": {"scheme": "musl"},
+    method = {"scheme": "musl"} if formulation == "ulmpm" else {"scheme": "musl", "formulation": formulation}
+    return {"dimension": 2, "axisymmetric": axisymmetric, "method": method,
             "grid": {"lower": [R_IN, 0.0], "upper": [R_OUT, 0.2], "cell_size": cell},
             "materials": {"wall": {"model": "linear_elastic", **UNIT}},
             "bodies": [{"name": "wall", "material": "wall",
@@ -159,10 +160,10 @@ def tube_steady(r: np.ndarray) -> np.ndarray:
     return np.log(r / R_IN) / math.log(R_OUT / R_IN)
 
 
-def tube_error(axisymmetric: bool, cell: float = 0.05, end: float = 1.0) -> float:
+def tube_error(axisymmetric: bool, cell: float = 0.05, end: float = 1.0, formulation: str = "ulmpm") -> float:
     """Max nodal distance from the axisymmetric steady state ln(r/r1)/ln(r2/r1) at t = end
     (the slowest transient has decayed by exp(-pi^2 end))."""
-    scene = load_scene(tube_scene(axisymmetric, cell, end))
+    scene = load_scene(tube_scene(axisymmetric, cell, end, formulation))
     sim = ExplicitMPM(scene)
     dt = sim.stable_time_step(scene.time.cfl)
     advance_to(sim, end, dt)

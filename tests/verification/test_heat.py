@@ -129,6 +129,10 @@ class TestAxisymmetricConduction:
         assert hc.tube_error(axisymmetric=True) < 1e-3
         assert hc.tube_error(axisymmetric=False) > 0.05
 
+    def test_the_same_in_tlmpm(self):
+        # the nominal flux J F^-1 q with F's in-plane block and J = det(F_rz) F_thth (solver/thermal.py)
+        assert hc.tube_error(axisymmetric=True, formulation="tlmpm") < 1e-3
+
 
 class TestThermalExpansion:
     """A bar heated uniformly by 100 K over 2 ms (5 periods of its fundamental mode, so
