@@ -6,6 +6,7 @@ from typing import Any
 import redis
 from fastapi import APIRouter, Depends
 
+from service.deps import CallerDep, ServicesDep
 from service.errors import documented, error_response
 from service.state import Services, services
 
@@ -32,9 +33,10 @@ def readyz(svc: Services = Depends(services)) -> Any:
 
 
 @router.get("/v1/health", responses=documented({503: "Redis unreachable"}))
-def health(svc: Services = Depends(services)) -> Any:
+def health(svc: ServicesDep, _caller: CallerDep) -> Any:
     """The live workers, and those still compiling their kernels at start ("warming": they
-    take jobs meanwhile, and a job may wait for its kernels to compile)."""
+    take jobs meanwhile, and a job may wait for its kernels to compile). A /v1 route: with
+    tokens it needs one, as the workers' names say which hosts run them."""
     try:
         workers, warming = svc.store.live_workers(), svc.store.warming_workers()
     except redis.RedisError as exc:

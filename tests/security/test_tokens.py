@@ -17,7 +17,7 @@ from service_support import MPM, long_running, two_disks, wait_for_status
 from mpm_client import Client
 from mpm_client.errors import NotFound, Unauthorized
 
-V1_READS = ["/v1/jobs", "/v1/examples", "/v1/examples/two_disks", "/v1/schema/scene",
+V1_READS = ["/v1/jobs", "/v1/health", "/v1/examples", "/v1/examples/two_disks", "/v1/schema/scene",
             f"/v1/jobs/{uuid.uuid4()}"]
 OPEN = ["/healthz", "/readyz", "/openapi.json", "/docs", "/"]
 
