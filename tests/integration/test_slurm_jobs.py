@@ -117,9 +117,10 @@ def test_cancelling_a_job_stops_its_solver_cleanly(api, slurm_stack, processes):
     final = wait_for_status(api, job["id"], timeout=60)
     assert final["status"] == "cancelled", final
     # SIGTERM to the solver or its ranks (scancel --signal=TERM): they end the step in flight, rank 0 closes
-    # the result file as partial, and the batch job ends with the solver's exit code for that
+    # the result file as partial, and the batch job ends with the solver's exit code for that (3); with
+    # two ranks mpiexec may report the signal its proxies got (15) instead: seen once in a full run
     batch = slurm_job(slurm_stack, job["id"])
-    assert (batch["JobState"], batch["ExitCode"]) == ("FAILED", "3:0"), batch
+    assert batch["JobState"] == "FAILED" and batch["ExitCode"] in ({"3:0"} if processes == 1 else {"3:0", "15:0"}), batch
     files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
     with h5py.File(files.result, "r") as result:
         assert result.attrs["status"] == "partial" and len(result["frames"]) >= 1
