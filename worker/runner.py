@@ -56,13 +56,19 @@ def _kill_group(process: subprocess.Popen, sig: int) -> None:
         pass
 
 
+def progress_item(raw: str) -> ProgressLine | None:
+    """A line of the solver's output as its JSON object, or None for a line that is not one (log text)."""
+    try:
+        item = json.loads(raw)
+    except ValueError:
+        return None
+    return item if isinstance(item, dict) else None
+
+
 def _read_lines(stream, lines: queue.Queue, log) -> None:
     for raw in stream:
-        try:
-            item = json.loads(raw)
-        except ValueError:
-            item = None
-        if isinstance(item, dict):
+        item = progress_item(raw)
+        if item is not None:
             lines.put(item)
             if item.get("event") == "done":  # the run's last word goes to its log too (GET .../log),
                 # with the result's name, not the server's path to it

@@ -39,7 +39,6 @@ child process, and answers the same `Outcome`:
 """
 from __future__ import annotations
 
-import json
 import logging
 import shlex
 import signal
@@ -52,7 +51,7 @@ from typing import Callable
 
 from core.paths import JobFiles
 from core.settings import Settings
-from worker.runner import Outcome, ProgressLine, tail
+from worker.runner import Outcome, ProgressLine, progress_item, tail
 
 log = logging.getLogger("mpm.worker")
 
@@ -316,11 +315,8 @@ class _LineReader:
         self.offset += end
         items, to_log = [], []
         for raw in data[:end].decode(errors="replace").splitlines():
-            try:
-                item = json.loads(raw)
-            except ValueError:
-                item = None
-            if isinstance(item, dict):
+            item = progress_item(raw)
+            if item is not None:
                 items.append(item)
                 if item.get("event") == "done":
                     self.done = item
