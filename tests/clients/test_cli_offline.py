@@ -35,12 +35,13 @@ def test_submit_download_waits_and_writes_the_result(fake, servers, tmp_path, ca
     fake.on("GET", f"{JOB}/result.h5", httpx.Response(200, content=b"hdf5"))
     out = tmp_path / "out.h5"
     code = cli.main(["submit", str(scene), "--download", str(out), "--server", "http://elsewhere:9000",
-                     "--token", "t0k", "-n", "2"])
+                     "--token", "t0k", "-n", "2", "--nodes", "2"])
     assert code == 0
     assert capsys.readouterr().out.strip() == JOB_ID  # the id alone on stdout, for scripts
     assert out.read_bytes() == b"hdf5"
     assert servers == [("http://elsewhere:9000", "t0k")]
-    assert sent_json(fake.calls("POST", "/v1/jobs")[0])["processes"] == 2
+    sent = sent_json(fake.calls("POST", "/v1/jobs")[0])
+    assert (sent["processes"], sent["nodes"]) == (2, 2)
 
 
 def test_submit_prints_every_validation_error_and_fails(fake, servers, tmp_path, capsys):

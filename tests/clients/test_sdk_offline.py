@@ -132,9 +132,15 @@ def test_submit_sends_scene_processes_and_token(fake, client):
     fake.on("POST", "/v1/jobs", httpx.Response(202, json=job_record()))
     job = client.submit(SCENE, processes=2)
     request = fake.calls("POST", "/v1/jobs")[0]
-    assert sent_json(request) == {"scene": SCENE, "processes": 2}
+    assert sent_json(request) == {"scene": SCENE, "processes": 2}  # no nodes unless asked: the service's default
     assert request.headers["authorization"] == "Bearer secret"
     assert job.record.summary.particles == 416
+
+
+def test_submit_asks_for_slurm_nodes_beside_processes(fake, client):
+    fake.on("POST", "/v1/jobs", httpx.Response(202, json=job_record()))
+    client.submit(SCENE, processes=4, nodes=2)
+    assert sent_json(fake.calls("POST", "/v1/jobs")[0]) == {"scene": SCENE, "processes": 4, "nodes": 2}
 
 
 def test_submit_reads_a_file_json_text_or_a_pydantic_model(fake, client, tmp_path):

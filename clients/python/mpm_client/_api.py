@@ -53,9 +53,11 @@ def job_path(job_id: str, tail: str = "") -> str:
     return f"/v1/jobs/{quote(str(job_id), safe='')}{tail}"
 
 
-def submit(scene: SceneLike, processes: int | None, callback_url: str | None = None) -> Call:
+def submit(scene: SceneLike, processes: int | None, callback_url: str | None = None,
+           nodes: int | None = None) -> Call:
     body: dict[str, Any] = {"scene": scene_document(scene)}
-    body.update({key: value for key, value in (("processes", processes), ("callback_url", callback_url))
+    body.update({key: value for key, value in (("processes", processes), ("nodes", nodes),
+                                               ("callback_url", callback_url))
                  if value is not None})
     return Call("POST", "/v1/jobs", json=body)
 

@@ -44,8 +44,9 @@ class AsyncClient:
     def __repr__(self) -> str:
         return f"AsyncClient({self.base_url!r})"
 
-    async def submit(self, scene: SceneLike, processes: int | None = None) -> "AsyncJob":
-        return self._job((await self._send(_api.submit(scene, processes))).json())
+    async def submit(self, scene: SceneLike, processes: int | None = None,
+                     nodes: int | None = None) -> "AsyncJob":
+        return self._job((await self._send(_api.submit(scene, processes, nodes=nodes))).json())
 
     async def validate(self, scene: SceneLike) -> Summary:
         return Summary.model_validate((await self._send(_api.validate(scene))).json()["summary"])

@@ -68,6 +68,8 @@ def register_submit(subparsers: argparse._SubParsersAction) -> None:
         description="Submit a scene to the service; prints the job id on stdout.")
     parser.add_argument("scene", metavar="SCENE", help="scene file (JSON)")
     parser.add_argument("-n", "--processes", type=int, default=None, help="processes to ask for")
+    parser.add_argument("--nodes", type=int, default=None,
+                        help="Slurm nodes to spread the processes over (a service with MPM_LAUNCHER=slurm)")
     parser.add_argument("--wait", action="store_true", help="wait for the job to finish, with a progress bar")
     parser.add_argument("--download", metavar="FILE", default=None,
                         help="wait, then download result.h5 to FILE")
@@ -79,7 +81,7 @@ def register_submit(subparsers: argparse._SubParsersAction) -> None:
 @_reports_errors
 def _submit(args: argparse.Namespace) -> int:
     with _client(args) as client:
-        job = client.submit(args.scene, processes=args.processes)
+        job = client.submit(args.scene, processes=args.processes, nodes=args.nodes)
         print(job.id, flush=True)
         if not (args.wait or args.download):
             return 0

@@ -48,10 +48,12 @@ class Client:
 
     # -- the API ---------------------------------------------------------------
 
-    def submit(self, scene: SceneLike, processes: int | None = None, callback_url: str | None = None) -> "Job":
+    def submit(self, scene: SceneLike, processes: int | None = None, callback_url: str | None = None,
+               nodes: int | None = None) -> "Job":
         """Validate, store and enqueue a scene (dict, file path, JSON text or solver ``Scene``);
-        with ``callback_url`` the service POSTs the final job record there, signed."""
-        return self._job(self._send(_api.submit(scene, processes, callback_url)).json())
+        with ``callback_url`` the service POSTs the final job record there, signed; ``nodes``
+        spreads the processes over that many nodes of a Slurm cluster (MPM_LAUNCHER=slurm)."""
+        return self._job(self._send(_api.submit(scene, processes, callback_url, nodes)).json())
 
     def sweep(self, scene: SceneLike, parameters: dict[str, list[Any]], mode: str = "grid", *,
               processes: int | None = None, callback_url: str | None = None) -> "Sweep":

@@ -56,6 +56,7 @@ class JobRecord(_Open):
     energies: Energies = Field(default_factory=Energies)
     error: str | None = None
     processes: int | None = None
+    nodes: int | None = None   # Slurm nodes its processes spread over (MPM_LAUNCHER=slurm)
     summary: Summary | None = None
     links: dict[str, str] = Field(default_factory=dict)
 
