@@ -25,7 +25,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from solver.errors import SolverError
-from solver.results import RESULT_FILE, list_frames, read_frame, read_scene
+from solver.results import MAX_PREVIEW_POINTS, RESULT_FILE, list_frames, read_frame, read_scene
 from solver.units import unit_of_field, with_unit
 
 PREVIEW_FILE = "preview.png"
@@ -124,6 +124,7 @@ def draw_frame(figure: Figure, scene: dict[str, Any], snapshot: dict[str, Any], 
     axes = axis_labels(scene)
     lower, upper = _extent(scene, position)
     spacing = _particle_spacing(scene, snapshot["fields"]["body"], lower, upper, len(values))
+    spacing = spacing * snapshot.get("every", 1) ** (1.0 / dimension)   # every k-th particle: k^(1/d) apart
     if dimension == 1:
         _plot_1d(figure, position[:, 0], values, label, lower, upper, axes, (low, high))
     elif dimension == 2:
@@ -153,7 +154,7 @@ def render_preview(
     """
     scene = read_scene(result_path)
     figure = new_figure(int(scene["dimension"]))
-    draw_frame(figure, scene, read_frame(result_path, frame), field)
+    draw_frame(figure, scene, read_frame(result_path, frame, MAX_PREVIEW_POINTS), field)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=DPI)
     png = buffer.getvalue()

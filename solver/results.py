@@ -356,8 +356,15 @@ class FrameNotFound(SolverError, IndexError):
         return f"frame {self.frame} is out of range: {file} has {self.count} frames (0..{self.count - 1})"
 
 
-def read_frame(path: str | os.PathLike, frame: int = -1) -> dict[str, Any]:
-    """One frame (``-1``: the last): ``{"index", "name", "time", "step", "fields": {name: array}}``.
+# A preview (solver/preview.py) draws at most this many particles (every k-th of a larger frame, each marker k^(1/d)
+# times larger): matplotlib takes about 600 bytes and 0.5 ms a point in 3D (benchmarks/memory.py),
+# so a frame of millions would cost the run more memory than its simulation and an hour of drawing.
+MAX_PREVIEW_POINTS = 250_000
+
+
+def read_frame(path: str | os.PathLike, frame: int = -1, max_rows: int | None = None) -> dict[str, Any]:
+    """One frame (``-1``: the last): ``{"index", "name", "time", "step", "every", "fields": {name: array}}``;
+    `max_rows`: read every k-th particle only (``every`` = k), k the least that keeps to it.
 
     Raises :class:`FrameNotFound` (an ``IndexError``) for a frame out of range."""
     with open_result(path) as h5:
@@ -366,12 +373,15 @@ def read_frame(path: str | os.PathLike, frame: int = -1) -> dict[str, Any]:
             raise FrameNotFound(path, frame, len(names))
         index = frame % len(names)
         group = h5["frames"][names[index]]
+        rows = group["id"].shape[0] if "id" in group else 0
+        every = max(1, -(-rows // max_rows)) if max_rows else 1
         return {
             "index": index,
             "name": names[index],
             "time": float(group.attrs["time"]),
             "step": int(group.attrs["step"]),
-            "fields": {key: group[key][()] for key in group},
+            "every": every,
+            "fields": {key: group[key][()] if every == 1 else group[key][::every] for key in group},
         }
 
 

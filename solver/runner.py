@@ -8,6 +8,7 @@ rank 0 writes the result file and reports progress.
 """
 from __future__ import annotations
 
+import gc
 import math
 import signal
 import threading
@@ -154,14 +155,23 @@ def _run(scene, out_dir, started, compiling, progress, should_stop, resume, chec
         checkpoints.finish(loop.sim, reason)
         status = "complete" if reason == "finished" else "partial"
         writer.close(status)
+    particles = int(domain.sum(loop.sim.particles.count))
+    loop.release()   # the preview reads the last frame back: not beside the particles' and grid's arrays
     if domain.is_root:
         from solver.preview import finish_outputs   # matplotlib: a second of imports, not before the first step
         finish_outputs(out_dir, scene)
     wall = wallclock.perf_counter() - started
     loop.report(wallclock.perf_counter(), stage="writing")
     return Result(status=status, reason=reason, message=message, steps=loop.sim.step_count, time=loop.sim.time,
-                  wall_seconds=wall, particles=int(domain.sum(loop.sim.particles.count)),
-                  result_path=str(out_dir / "result.h5"), out_dir=str(out_dir))
+                  wall_seconds=wall, particles=particles, result_path=str(out_dir / "result.h5"), out_dir=str(out_dir))
+
+
+@dataclass
+class _Ended:
+    """What is left of a simulation once its run has ended: what the last report reads."""
+    step_count: int
+    time: float
+    domain: object
 
 
 class _TimeLoop:
@@ -251,6 +261,11 @@ class _TimeLoop:
         to_frame = self.frames.until_next(sim.time)
         self.dt = min(dt, to_frame) if to_frame > TIME_TOLERANCE * dt else dt
         sim.advance(self.dt)
+
+    def release(self) -> None:
+        """Let the simulation's arrays go (the run has ended), keeping its step, time and domain."""
+        self.sim = _Ended(self.sim.step_count, self.sim.time, self.sim.domain)
+        gc.collect()   # its phases and hooks hold it (cycles): collected now, not at the collector's leisure
 
     def report(self, now: float, stage: str = "stepping") -> None:
         if self.progress is not None and self.sim.domain.is_root:

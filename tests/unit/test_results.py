@@ -188,6 +188,19 @@ def test_readers(tmp_path):
     assert read_series(path)["time"].shape == (30,)
 
 
+def test_read_frame_with_max_rows_reads_every_kth_particle(tmp_path):
+    """What a preview of a large frame reads (solver/preview.py): the least k whose every k-th
+    row keeps to max_rows, the same rows of every field."""
+    path = write_result(tmp_path, 2)
+    whole = read_frame(path)["fields"]
+    for max_rows, every in ((N, 1), (N - 1, 2), (N // 3, 3)):
+        part = read_frame(path, max_rows=max_rows)
+        assert part["every"] == every
+        for name, values in whole.items():
+            np.testing.assert_array_equal(part["fields"][name], values[::every])
+            assert len(part["fields"][name]) <= max_rows
+
+
 def test_readers_reject_other_hdf5_files(tmp_path):
     with h5py.File(tmp_path / "other.h5", "w") as h5:
         h5["x"] = [1.0]
