@@ -14,7 +14,7 @@ import math
 import numpy as np
 from pydantic import BaseModel, Field
 
-from solver import cost, stability
+from solver import cost, materials, stability
 from solver import shape as shape_functions
 from solver.scene import Scene
 from solver.schema import count_up
@@ -29,7 +29,8 @@ class Summary(BaseModel):
     grid_nodes: int = Field(description="grid nodes: product of (cells + 1) over the axes")
     dt: float = Field(description="the fixed time step, or an estimate of the adaptive one at t = 0")
     estimated_steps: int = Field(description="end / dt; an estimate when dt is adaptive")
-    memory_bytes: int = Field(description="estimate of the solver's particle and grid arrays")
+    memory_bytes: int = Field(description="estimate of the run's peak resident memory: the process, its particle "
+                                          "and grid arrays, its output (solver/summary.py memory_bytes)")
     estimated_run_seconds: float = Field(description="wall time from start to exit, from this machine's measured "
                                                      "cost model (solver/cost.py; mpm calibrate), compilation "
                                                      "included")
@@ -107,36 +108,88 @@ def estimate_steps(scene: Scene) -> int:
     return max(1, count_up(scene.time.end / dt if dt > 0 else math.inf))   # dt underflowed: no end in sight
 
 
+# The transfers that keep C_p (solver/transfer.py TRANSFERS; that module is numba's).
+_AFFINE_TRANSFERS = ("apic", "mls")
+# What a solver process holds before its scene's arrays: python, numpy, numba, h5py and the
+# step's compiled kernels (benchmarks/memory.py: a run's peak less its arrays, 35 k to 3 M particles).
+PROCESS_BASELINE_BYTES = 230 * 2**20
+# Resident bytes a point of the preview takes while matplotlib draws it (3D scatter; the
+# sim's arrays are gone by then, solver/runner.py): benchmarks/memory.py.
+_PREVIEW_POINT_BYTES = 600
+
+
 def memory_bytes(scene: Scene, particles: int, nodes: int) -> int:
-    """8-byte values per particle: position, velocity (dim each), F and L (dim^2
-    each), stress (9), mass, volume, volume0, density, id, the weights and weight
-    gradients of the nodes it touches and their indices; 4 bytes for the body
-    index. Per node: mass, two momenta and force (dim each); with contact "friction" that per
-    body, and each body's presence and normal (1 + dim)."""
+    """The run's peak resident memory: each process's baseline, plus memory_estimate's parts
+    held at once while stepping, or the preview's drawing after them where that is more."""
+    from solver.results import MAX_PREVIEW_POINTS   # (h5py: not for the scene's other figures)
+
+    held = sum(memory_estimate(scene, particles, nodes).values())
+    preview = _PREVIEW_POINT_BYTES * min(particles, MAX_PREVIEW_POINTS)
+    return PROCESS_BASELINE_BYTES * scene.parallel.processes + max(held, preview)
+
+
+def particle_bytes(scene: Scene) -> int:
+    """Bytes per particle of the arrays the solver keeps for it (solver/state.py Particles):
+    8-byte position, velocity (dim each), F and L (dim^2, 3x3 axisymmetric), stress (9),
+    mass, volume, volume0, id; the 4-byte body index; the materials' declared state
+    (solver/materials/registry.py state_values); the reference position where TLMPM or a
+    body force needs it (and TLMPM's first Piola stress); C_p of APIC and MLS; the fused
+    backend's v_pic of MUSL's remap (allocated for any scheme), or the general backend's
+    stored stencil: the weights, weight gradients and node indices of the nodes it touches."""
+    from solver.loads import BodyLoads
+
     dim = scene.dimension
-    touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
-    per_particle = 8 * (2 * dim + 2 * dim * dim + 9 + 4 + 1 + touched * (1 + dim) + touched) + 4
-    per_node = 8 * (1 + 3 * dim) + (8 * (1 + dim) if scene.contact.fields else 0)
-    return particles * per_particle + nodes * per_node * scene.grid_fields()
+    tensor = 9 if scene.axisymmetric else dim * dim
+    values = 2 * dim + 2 * tensor + 9 + 4 + materials.state_values(scene)
+    if scene.method.formulation == "tlmpm":
+        values += dim + tensor
+    elif BodyLoads(scene).needs_reference:
+        values += dim
+    if scene.method.transfer in _AFFINE_TRANSFERS:
+        values += dim * dim
+    if cost.backend_name(scene) == "fused":
+        values += dim
+    else:
+        touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
+        values += touched * (1 + dim) + touched
+    return 8 * values + 4
+
+
+def node_bytes(scene: Scene, threads: int) -> int:
+    """Bytes per grid node (of one velocity field): mass, momentum, force, v_old and v_new
+    (solver/state.py Grid), the copies of mass, momentum and force each thread beyond the
+    first adds into (solver/threads.py ScatterCopies), the domain's 1-byte mask of active
+    nodes; with contact "friction" each body's field and its presence and normal (1 + dim)."""
+    dim = scene.dimension
+    per_field = 8 * (1 + 4 * dim) + 8 * (threads - 1) * (1 + 2 * dim)
+    return scene.grid_fields() * (per_field + (8 * (1 + dim) if scene.contact.fields else 0)) + 1
 
 
 # Values per particle of an output field in a frame (solver/fields.py); 1 for the scalars.
 _FRAME_FIELD_WIDTH = {"position": "dim", "velocity": "dim", "stress": 6, "deformation_gradient": "dim2"}
+# Output fields one process writes from the state's own arrays (no copy); the others are formed for the frame.
+_FRAME_VIEWS = {"position", "velocity", "deformation_gradient", "mass", "volume"}
 _BODY_BYTES = 4096          # a body's own objects (its geometry, material, expressions), roughly
 _FRAME_BYTES = 256          # a frame's bookkeeping (its HDF5 group and attributes in the writer)
 _SERIES_VALUE_BYTES = 16    # a buffered row's float and its dataset value
 
 
 def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
-    """The bytes a run holds at once, by the scene path that makes them (what a limit
-    error names): arithmetic on the scene, nothing allocated. "bodies" is the particle
-    arrays (memory_bytes) and each body's own objects, "grid" the grid's arrays, "output.frames"
-    one gathered frame and every frame's bookkeeping, "output.series" the energy and
-    `output.series` rows (one column per body and axis for momentum and center_of_mass)."""
+    """The bytes a run's scene makes it hold at once, by the scene path that makes them (what
+    a limit error names): arithmetic on the scene, nothing allocated. "bodies" is the particle
+    arrays (particle_bytes) and each body's own objects, "grid" the grid's arrays (node_bytes,
+    on the threads the run will take), "output.frames" what a frame forms (one process: the
+    fields it derives, e.g. the stress's six components; several: the frame gathered on rank 0)
+    and every frame's bookkeeping, "output.series" the energy and `output.series` rows (one
+    column per body and axis for momentum and center_of_mass)."""
     dim = scene.dimension
     widths = {"dim": dim, "dim2": dim * dim}
-    frame_width = 3 + sum(widths.get(w, w) if isinstance(w, str) else w for w in
-                          (_FRAME_FIELD_WIDTH.get(name, 1) for name in scene.output.fields))
+    field_widths = {name: widths.get(w, w) for name, w in
+                    ((name, _FRAME_FIELD_WIDTH.get(name, 1)) for name in scene.output.fields)}
+    if scene.parallel.processes > 1:
+        frame = 2 * 8 * (3 + sum(field_widths.values())) * particles
+    else:
+        frame = 8 * sum(w for name, w in field_widths.items() if name not in _FRAME_VIEWS) * particles
     steps = estimate_steps(scene)
     energies = scene.output.energies
     if energies is False:
@@ -147,9 +200,10 @@ def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
     per_body_columns = {"momentum": dim, "center_of_mass": dim}
     columns = 8 + sum(per_body_columns.get(name, 0) * len(scene.bodies) for name in scene.output.series) \
         + dim * (len(scene.boundary_conditions) + len(scene.bodies)) * ("reactions" in scene.output.series)
-    return {"bodies": memory_bytes(scene, particles, 0) + _BODY_BYTES * len(scene.bodies),
-            "grid": memory_bytes(scene, 0, nodes),
-            "output.frames": 2 * 8 * frame_width * particles + _FRAME_BYTES * scene.output.frames,
+    threads = cost.planned_threads(scene, particles)
+    return {"bodies": particles * particle_bytes(scene) + _BODY_BYTES * len(scene.bodies),
+            "grid": nodes * node_bytes(scene, threads),
+            "output.frames": frame + _FRAME_BYTES * scene.output.frames,
             "output.series": _SERIES_VALUE_BYTES * rows * columns}
 
 

@@ -40,11 +40,12 @@ from solver.materials.registry import (
     output_fields,
     register,
     registered,
+    state_values,
     unregister,
 )
 
 __all__ = ["REGISTRY", "MaterialType", "StateVariable", "create", "init_particles", "names", "on_change",
-           "output_fields", "register", "registered", "unregister", "BUILTIN"]
+           "output_fields", "register", "registered", "state_values", "unregister", "BUILTIN"]
 
 # The materials of this package, in the order the scene's union lists them
 # (error messages name the models in this order).

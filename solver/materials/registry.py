@@ -9,6 +9,7 @@ output fields of material state (solver/fields.py) and the documentation check
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -162,6 +163,17 @@ def create(config, dimension: int):
     model = material.load_solver_class()(config, dimension)
     model.config = config   # init_particles finds the declared state through it
     return model
+
+
+def state_values(scene) -> int:
+    """8-byte values per particle of the state the scene's materials declare (init_particles
+    allocates each name once, for every particle): what solver.summary's memory estimate counts."""
+    tails = {}
+    for config in scene.materials.values():
+        for variable in _TYPES[config.model].state:
+            if variable.when is None or variable.when(config):
+                tails[variable.name] = variable.tail
+    return sum(math.prod(tail) for tail in tails.values())
 
 
 def init_particles(models, particles, scene) -> None:

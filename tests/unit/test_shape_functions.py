@@ -232,16 +232,19 @@ def test_support_sizes(name):
 
 
 def test_the_summary_budgets_the_registered_support(monkeypatch):
-    """summary.memory_bytes reads the support from the registry: 8 bytes per weight,
-    per index and per gradient component of each node a particle touches."""
+    """summary.particle_bytes reads the support from the registry: 8 bytes per weight,
+    per index and per gradient component of each node a particle touches, where the general
+    backend stores the stencil."""
+    from solver import cost
     from solver.scene import load_scene
-    from solver.summary import memory_bytes
+    from solver.summary import particle_bytes
 
     scene = load_scene(Path(__file__).parents[2] / "examples" / "two_disks.json")   # 2D, linear
-    before = memory_bytes(scene, 100, 10)
+    monkeypatch.setattr(cost, "backend_name", lambda scene: "general")
+    before = particle_bytes(scene)
     monkeypatch.setitem(shape.REGISTRY, "linear", replace(shape.REGISTRY["linear"], support=5))
     touched_more = 5**2 - 2**2
-    assert memory_bytes(scene, 100, 10) - before == 100 * 8 * touched_more * (2 + scene.dimension)
+    assert particle_bytes(scene) - before == 8 * touched_more * (2 + scene.dimension)
 
 
 @pytest.mark.parametrize("name", [name for name in ALL if shape.REGISTRY[name].apic_d is not None])
