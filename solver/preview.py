@@ -17,12 +17,14 @@ from __future__ import annotations
 
 import io
 import os
+from itertools import combinations
 from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import FixedLocator, MaxNLocator
 
 from solver.errors import SolverError
 from solver.results import MAX_PREVIEW_POINTS, RESULT_FILE, list_frames, read_frame, read_scene
@@ -33,6 +35,10 @@ DEFAULT_FIELD = "velocity_magnitude"
 DPI = 100
 # Squares drawn a little larger than the particle spacing so a body has no seams.
 MARKER_OVERLAP = 1.1
+# The most ticks a 3D axis gets, then fewer until their labels are clear of each other
+# (matplotlib's default locator counts ticks for a flat axis of that width: a foreshortened
+# depth axis got ten labels on top of each other).
+TICKS_3D = (6, 5, 4, 3, 2)
 
 
 def von_mises(voigt: np.ndarray) -> np.ndarray:
@@ -292,8 +298,43 @@ def _plot_3d(figure: Figure, position, values, label: str, lower, upper, spacing
     axes.view_init(elev=22, azim=-60)
     _colour_bar(figure, points, axes, label, low, high)
     figure.subplots_adjust(top=0.88)
+    _clear_tick_labels(figure, axes, points)
     figure.canvas.draw()
     # The projected box is about 0.55 of the axes width along its longest edge.
     longest = float(np.max(upper - lower))
     points_per_unit = 0.55 * axes.get_window_extent().width / longest * 72.0 / DPI
     points.set_sizes((1.3 * spacing * points_per_unit) ** 2)
+
+
+def tick_label_boxes(axis, renderer) -> list[tuple[float, Any]]:
+    """The drawn tick labels of an axis: (tick value, its label's box in pixels); after a draw."""
+    low, high = sorted(axis.get_view_interval())
+    slack = 1e-9 * (high - low)
+    locations = axis.get_majorticklocs()
+    return [(float(location), tick.label1.get_window_extent(renderer))
+            for location, tick in zip(locations, axis.get_major_ticks(len(locations)))
+            if low - slack <= location <= high + slack and tick.label1.get_visible() and tick.label1.get_text()]
+
+
+def _clear_tick_labels(figure: Figure, axes, points) -> None:
+    """Tick labels of a 3D plot clear of each other: each axis with as many ticks (TICKS_3D) as
+    its labels have room for, then where two axes meet at a corner (an x label on a depth
+    label), the label of the later axis left out. Drawn without the particles (the costly part)."""
+    points.set_visible(False)
+    renderer = figure.canvas.get_renderer()
+    axes_3d = (axes.xaxis, axes.zaxis, axes.yaxis)   # x, the vertical axis, then depth: kept in this order
+    for axis in axes_3d:
+        for count in TICKS_3D:
+            axis.set_major_locator(MaxNLocator(nbins=count - 1))
+            figure.canvas.draw()
+            boxes = [box for _, box in tick_label_boxes(axis, renderer)]
+            if not any(a.overlaps(b) for a, b in combinations(boxes, 2)):
+                break
+    kept = []
+    for axis in axes_3d:
+        labels = tick_label_boxes(axis, renderer)
+        clear = [(value, box) for value, box in labels if not any(box.overlaps(other) for other in kept)]
+        if len(clear) < len(labels):
+            axis.set_major_locator(FixedLocator([value for value, _ in clear]))
+        kept += [box for _, box in clear]
+    points.set_visible(True)

@@ -159,3 +159,27 @@ def test_finish_outputs_falls_back_when_the_preview_field_is_not_written(tmp_pat
     path = write(tmp_path, 2, preview_field="density")  # a valid field, but not in these frames
     png = finish_outputs(tmp_path, scene(2, preview_field="density"))
     assert png.read_bytes() == render_preview(path, field="velocity_magnitude")
+
+
+@pytest.mark.parametrize("upper", [[0.14, 0.14, 0.08], [0.00912, 0.0258, 0.00912], [1.0, 1.0, 1.0]],
+                         ids=["bracket", "taylor-bar", "unit-cube"])
+def test_3d_tick_labels_are_clear_of_each_other(upper):
+    """The boxes of the 3D examples: matplotlib's own ticks put the x label 0.14 on the depth
+    label 0.00 at their corner, and ten depth labels on top of each other along a short axis."""
+    from itertools import combinations
+
+    from solver.preview import draw_frame, new_figure, tick_label_boxes
+
+    document = scene(3).model_dump(mode="json")
+    document["grid"].update(lower=[0.0] * 3, upper=upper, cell_size=min(upper) / 10)
+    position = np.asarray(upper) * (0.2 + 0.6 * np.random.default_rng(1).random((500, 3)))
+    figure = new_figure(3)
+    draw_frame(figure, document, {"fields": {"position": position, "body": np.zeros(500), "velocity": position},
+                                  "time": 0.0, "step": 0, "index": 0}, "velocity")
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    axes = figure.axes[0]
+    labels = {axis: tick_label_boxes(axis, renderer) for axis in (axes.xaxis, axes.yaxis, axes.zaxis)}
+    assert all(len(found) >= 2 for found in labels.values()), "each axis keeps two labels at least"
+    boxes = [(axis.axis_name, value, extent) for axis, found in labels.items() for value, extent in found]
+    assert not [(a[:2], b[:2]) for a, b in combinations(boxes, 2) if a[2].overlaps(b[2])]
