@@ -1,15 +1,18 @@
 """Scene validation for the API (solver.scene, solver.summary) and the scene routes:
-validate, the JSON Schema, the built-in examples."""
+validate, a Karamelo input file imported, the JSON Schema, the built-in examples."""
 from __future__ import annotations
 
+from dataclasses import asdict
 from functools import lru_cache
+from pathlib import PurePath
 from typing import Any
 
 from fastapi import APIRouter, Body, Depends
-from pydantic import BaseModel, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
 
 from solver import capabilities
+from solver.karamelo import KarameloError, translate
 from solver.examples import ExampleNotFound, list_examples, load_example
 from solver.scene import Limits, Scene, SceneError, load_scene
 from solver.summary import empty_bodies, summarize
@@ -104,6 +107,29 @@ def validate_scene(scene: dict[str, Any] = Body(..., description="a scene docume
                                "the scene is not valid")
     _, summary = check_scene(scene, svc.settings)
     return {"summary": summary}
+
+
+class KarameloFile(BaseModel):
+    """A Karamelo input file sent for import (JSON like every request body of the API)."""
+    model_config = ConfigDict(extra="forbid")
+    text: str = Field(description="the file's text")
+    name: str = Field("karamelo", max_length=200,
+                      description="the file's name (its stem names the scene, as `mpm import karamelo` does)")
+
+
+@router.post("/v1/scenes/import/karamelo",
+             responses=documented({413: "request over MPM_MAX_BODY_BYTES",
+                                   422: "a line the importer cannot read, by its number"}))
+def import_karamelo(file: KarameloFile) -> dict[str, Any]:
+    """A Karamelo input file imported into a scene, as `mpm import karamelo` does: the scene
+    (not validated: validate or submit it next), the lines left out and the lines translated
+    with a difference, each with its number, its text and the reason."""
+    try:
+        translation = translate(file.text, name=PurePath(file.name).stem or "karamelo")
+    except KarameloError as exc:
+        raise validation_error([{"path": "text", "message": str(exc)}], "the Karamelo file cannot be imported") from None
+    return {"scene": translation.scene, "untranslated": [asdict(item) for item in translation.untranslated],
+            "notes": [asdict(item) for item in translation.notes]}
 
 
 @lru_cache

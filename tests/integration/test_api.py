@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import asdict
+from pathlib import Path
 
 import httpx
 import pytest
 import redis
+
+from solver.karamelo import translate_file
 
 from service_support import MPM, Process, answers, free_port, two_disks, wait_until
 
@@ -151,6 +155,29 @@ def test_validate_answers_the_summary(api):
     assert summary["particles"] == sum(summary["particles_per_body"]) > 0
     assert summary["estimated_steps"] == 1000  # end 1.0 / dt 0.001
     assert summary["memory_bytes"] > 0 and summary["estimated_run_seconds"] > 0
+
+
+KARAMELO = Path(__file__).resolve().parents[1] / "data" / "karamelo"
+
+
+def test_a_karamelo_file_is_imported_with_its_left_out_lines(api):
+    """The route answers what `mpm import karamelo` makes of the file: the same scene and lines."""
+    path = KARAMELO / "Cantilever__2D__cantilever_force_tip.mpm"
+    answer = api.post("/v1/scenes/import/karamelo", json={"text": path.read_text(), "name": path.name})
+    assert answer.status_code == 200, answer.text
+    expected = translate_file(path)
+    assert answer.json()["scene"] == json.loads(json.dumps(expected.scene))
+    assert answer.json()["untranslated"] == [asdict(item) for item in expected.untranslated]
+    assert answer.json()["notes"] == [asdict(item) for item in expected.notes]
+    assert api.post("/v1/scenes/validate", json=answer.json()["scene"]).status_code == 200
+
+
+def test_a_karamelo_file_that_cannot_be_imported_names_its_line(api):
+    text = (KARAMELO / "Vertical_bar__ULMPM__vertical_bar.mpm").read_text()
+    answer = api.post("/v1/scenes/import/karamelo", json={"text": text})
+    assert answer.status_code == 422
+    [detail] = answer.json()["error"]["details"]
+    assert detail["path"] == "text" and detail["message"].startswith("line 34:") and "old syntax" in detail["message"]
 
 
 def test_a_body_over_the_size_limit_is_refused_with_413(api, stack):
