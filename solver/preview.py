@@ -39,6 +39,7 @@ MARKER_OVERLAP = 1.1
 # (matplotlib's default locator counts ticks for a flat axis of that width: a foreshortened
 # depth axis got ten labels on top of each other).
 TICKS_3D = (6, 5, 4, 3, 2)
+TICK_LABEL_GAP = 8.0   # pixels (half an em): labels closer than this read as one ("1.0 0.0")
 
 
 def von_mises(voigt: np.ndarray) -> np.ndarray:
@@ -327,12 +328,12 @@ def _clear_tick_labels(figure: Figure, axes, points) -> None:
         for count in TICKS_3D:
             axis.set_major_locator(MaxNLocator(nbins=count - 1))
             figure.canvas.draw()
-            boxes = [box for _, box in tick_label_boxes(axis, renderer)]
+            boxes = [box.padded(TICK_LABEL_GAP / 2) for _, box in tick_label_boxes(axis, renderer)]
             if not any(a.overlaps(b) for a, b in combinations(boxes, 2)):
                 break
     kept = []
     for axis in axes_3d:
-        labels = tick_label_boxes(axis, renderer)
+        labels = [(value, box.padded(TICK_LABEL_GAP / 2)) for value, box in tick_label_boxes(axis, renderer)]
         clear = [(value, box) for value, box in labels if not any(box.overlaps(other) for other in kept)]
         if len(clear) < len(labels):
             axis.set_major_locator(FixedLocator([value for value, _ in clear]))
