@@ -1,6 +1,8 @@
 """Per-particle output fields, derived from the state only when a frame asks for them."""
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from solver import materials, shape
@@ -122,10 +124,29 @@ def _material_outputs() -> dict[str, float]:
     return outputs
 
 
-def frame_fields(sim, names) -> dict[str, np.ndarray]:
-    """id, body, mass and position always; then every requested field."""
-    p = sim.particles
-    out = {"id": p.id, "body": p.body, "mass": p.mass, "position": p.x}
-    for name in names:
-        out[name] = np.ascontiguousarray(field(name)(sim))
-    return out
+class FrameFields(Mapping):
+    """A frame's fields by name, each formed from the state when it is read (and not kept):
+    a writer that takes them one at a time holds one formed field at once, not the frame
+    (the Taylor bar's 6-component stress: 48 bytes a particle)."""
+
+    def __init__(self, sim, names):
+        self._sim = sim
+        self._names = tuple(dict.fromkeys(("id", "body", "mass", "position", *names)))
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name not in self._names:
+            raise KeyError(name)
+        p = self._sim.particles
+        always = {"id": p.id, "body": p.body, "mass": p.mass, "position": p.x}
+        return always[name] if name in always else np.ascontiguousarray(field(name)(self._sim))
+
+    def __iter__(self):
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+
+def frame_fields(sim, names) -> FrameFields:
+    """id, body, mass and position always; then every requested field (formed when read)."""
+    return FrameFields(sim, names)

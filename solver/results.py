@@ -24,6 +24,7 @@ import os
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from collections.abc import Mapping
 from typing import Any
 
 import h5py
@@ -87,14 +88,28 @@ class ResultWriter:
 
     # -- frames ------------------------------------------------------------
 
-    def write_frame(self, step: int, time: float, fields: dict[str, np.ndarray]) -> str:
-        """Write one snapshot as ``/frames/NNNNNN`` and flush; returns the group name."""
+    def write_frame(self, step: int, time: float, fields: Mapping[str, np.ndarray]) -> str:
+        """Write one snapshot as ``/frames/NNNNNN`` and flush; returns the group name.
+
+        The fields are read and written one at a time: a mapping that forms each field as it is
+        read (solver/fields.py FrameFields) has one formed field alive at once, not the frame. A bad
+        field leaves no frame behind (the group is removed before the error is raised)."""
         self._check_open()
-        arrays = self._checked_fields(fields)
+        missing = [key for key in REQUIRED_FIELDS if key not in fields]
+        if missing:
+            raise ValueError(f"frame is missing the required field(s) {', '.join(missing)}")
         name = f"{self.frame_count:06d}"
         group = self._file["frames"].create_group(name)
-        for key, array in arrays.items():
-            group.create_dataset(key, data=array)
+        try:
+            count = None
+            for key in fields:
+                array = self._checked_field(key, fields[key], count)
+                count = array.shape[0]
+                group.create_dataset(key, data=array)
+                del array   # (before the next field is formed)
+        except ValueError:
+            del self._file["frames"][name]
+            raise
         # The attrs go last: readers take a frame without them as still being written.
         group.attrs["time"] = float(time)
         group.attrs["step"] = int(step)
@@ -103,34 +118,21 @@ class ResultWriter:
         self._file.flush()
         return name
 
-    def _checked_fields(self, fields: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        missing = [key for key in REQUIRED_FIELDS if key not in fields]
-        if missing:
-            raise ValueError(f"frame is missing the required field(s) {', '.join(missing)}")
-        arrays: dict[str, np.ndarray] = {}
-        count = None
-        for key, value in fields.items():
-            if not key or "/" in key:
-                raise ValueError(f"invalid field name {key!r}")
-            array = np.ascontiguousarray(value, dtype=INTEGER_DTYPES.get(key, np.float64))
-            if array.ndim == 0:
-                raise ValueError(f"field {key!r} must have one row per particle, got a scalar")
-            if count is None:
-                count = array.shape[0]
-            elif array.shape[0] != count:
-                raise ValueError(
-                    f"field {key!r} has {array.shape[0]} rows, expected {count} (one per particle)"
-                )
-            arrays[key] = array
-        expected = {
-            "id": (count,), "body": (count,), "mass": (count,),
-            "position": (count, self.dimension), "velocity": (count, self.dimension),
-            "stress": (count, 6),
-        }
-        for key, shape in expected.items():
-            if key in arrays and arrays[key].shape != shape:
-                raise ValueError(f"field {key!r} has shape {arrays[key].shape}, expected {shape}")
-        return arrays
+    def _checked_field(self, key: str, value, count: int | None) -> np.ndarray:
+        """The field as written (contiguous, its dtype); `count`: the rows of the fields before it."""
+        if not key or "/" in key:
+            raise ValueError(f"invalid field name {key!r}")
+        array = np.ascontiguousarray(value, dtype=INTEGER_DTYPES.get(key, np.float64))
+        if array.ndim == 0:
+            raise ValueError(f"field {key!r} must have one row per particle, got a scalar")
+        if count is not None and array.shape[0] != count:
+            raise ValueError(f"field {key!r} has {array.shape[0]} rows, expected {count} (one per particle)")
+        rows = array.shape[0]
+        expected = {"id": (rows,), "body": (rows,), "mass": (rows,), "position": (rows, self.dimension),
+                    "velocity": (rows, self.dimension), "stress": (rows, 6)}.get(key)
+        if expected is not None and array.shape != expected:
+            raise ValueError(f"field {key!r} has shape {array.shape}, expected {expected}")
+        return array
 
     # -- time series -------------------------------------------------------
 

@@ -179,7 +179,8 @@ def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
     a limit error names): arithmetic on the scene, nothing allocated. "bodies" is the particle
     arrays (particle_bytes) and each body's own objects, "grid" the grid's arrays (node_bytes,
     on the threads the run will take), "output.frames" what a frame forms (one process: the
-    fields it derives, e.g. the stress's six components; several: the frame gathered on rank 0)
+    widest field it derives, e.g. the stress's six components, as the writer takes the fields one
+    at a time; several: the frame gathered on rank 0)
     and every frame's bookkeeping, "output.series" the energy and `output.series` rows (one
     column per body and axis for momentum and center_of_mass)."""
     dim = scene.dimension
@@ -189,7 +190,7 @@ def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
     if scene.parallel.processes > 1:
         frame = 2 * 8 * (3 + sum(field_widths.values())) * particles
     else:
-        frame = 8 * sum(w for name, w in field_widths.items() if name not in _FRAME_VIEWS) * particles
+        frame = 8 * max((w for name, w in field_widths.items() if name not in _FRAME_VIEWS), default=0) * particles
     steps = estimate_steps(scene)
     energies = scene.output.energies
     if energies is False:

@@ -271,9 +271,10 @@ class SlabDomain:
 
     # -- output -------------------------------------------------------------------
 
-    def gather(self, fields: dict[str, np.ndarray]) -> dict[str, np.ndarray] | None:
-        """The fields of all particles, sorted by id, on rank 0 (None elsewhere)."""
-        parts = self.comm.gather(fields, root=0)
+    def gather(self, fields) -> dict[str, np.ndarray] | None:
+        """The fields of all particles (a mapping: solver/fields.py FrameFields forms them as they
+        are read, here all at once), sorted by id, on rank 0 (None elsewhere)."""
+        parts = self.comm.gather(dict(fields), root=0)
         if not self.is_root:
             return None
         merged = {name: np.concatenate([p[name] for p in parts]) for name in fields}
