@@ -1,7 +1,7 @@
 """Heat: the cost of conduction in a step, and the errors and times of the heat
 verification cases (the "Heat" section of docs/benchmarks.md).
 
-    python benchmarks/heat.py [--rounds 200] [--threads 1,2] [--skip-cases]
+    python benchmarks/heat.py [--rounds 200] [--threads 1,2] [--skip-cases] [--skip-cost]
 
 Cost: one 2D and one 3D scene (an elastic block, MUSL, linear hats, 58k and 111k
 particles), stepped in the same process, for each thread count:
@@ -144,6 +144,10 @@ def case_table() -> None:
         particles = np.max(np.abs(p.extra["temperature"] - hc.bar_exact(p.x[:, 0], sim.time)))
         print(f"| E12, 100 cells, dt = {dt:g} ([R]; errata F7) | max error at t = 0.05, grid / particles | "
               f"{grid:.2e} / {particles:.2e} | {wall:.2f} |")
+    for t in (0.0075, 0.03, 0.05):   # issue 51: the particle next to a held end takes the grid's T~
+        ends, wall = timed(hc.held_neighbour_errors, 100, 5e-5, t)
+        print(f"| E12, 100 cells, dt = 5e-05, t = {t:g} | the end cells' particles: error (bound) | "
+              + ", ".join(f"{e:.1e} ({b:.1e})" for e, b in ends) + f" | {wall:.2f} |")
     previous = None
     for cells, dt in ((10, 1e-4), (20, 1e-4), (40, 2.5e-5)):
         error, wall = timed(hc.plate_error, cells, dt)
@@ -173,8 +177,10 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=200, help="steps of each variant, one a round")
     parser.add_argument("--threads", default="1,2", help="thread counts, comma-separated (0: the default count)")
     parser.add_argument("--skip-cases", action="store_true")
+    parser.add_argument("--skip-cost", action="store_true")
     args = parser.parse_args()
-    cost_table(args.rounds, [int(t) for t in args.threads.split(",")])
+    if not args.skip_cost:
+        cost_table(args.rounds, [int(t) for t in args.threads.split(",")])
     if not args.skip_cases:
         print()
         case_table()

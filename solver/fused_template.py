@@ -82,6 +82,7 @@ import numpy as np
 from solver.jit import njit, prange
 
 from solver.fused import KINEMATICS, REMAP, USL, _axis, _quadratic, _reduce, _reduce_mass_momentum
+from solver.thermal_kernels import takes_grid_temperature
 from solver.threads import add_node_copies, block_bounds, own'''
 CHUNK = 64   # particles a chunk of `p2g_mls`: its buffers (16 values each in 2D) stay in L1 (64-256 measured: 64)
 LOG_CALL = re.compile(r"math\.log\((\w+)\)")
@@ -680,12 +681,15 @@ def _g2p_row_end(dim: int) -> list[str]:
 def _heat_g2p_gather(dim: int) -> list[str]:
     """Conduction's gathers, in the order of solver/thermal_kernels.py's sums: the REMAP pass
     takes dT_p = sum w (T~_I - T_I) (Algorithm 8, line 12; the hook formed T~_I - T_I, the same
-    bits as the difference taken here, one read less); the KINEMATICS pass, which runs
-    after the remapped T_I^{t+dt} was formed and still has x_p^t, the flux's sum grad w T_I
+    bits as the difference taken here, one read less), and sum w T~_I with the weight on held
+    nodes, which decide between the two (thermal_kernels.takes_grid_temperature); the
+    KINEMATICS pass, which runs after the remapped T_I^{t+dt} was formed and still has x_p^t, the flux's sum grad w T_I
     (line 15; MLS: its gradient w D_p^-1 (x_I - x_p), as the general stencil holds it)."""
     return [
         "if mode == REMAP:",
         "    dT += w * T_change[node]",
+        "    tg += w * T_grid[node]",
+        "    reach += w * held[node]",
         "if mode == KINEMATICS and kp != 0.0:",
         "    if mls:",
         *_indent(_each_line("dw{c} = w * d{c} * d_inv{a}", dim), 2),
@@ -707,7 +711,7 @@ def _g2p_remap(dim: int, thermal: bool, contact: bool) -> list[str]:
     ]
     heat = ["    mcap = m * capacity[p]",
             "    if mcap != 0.0:   # a material without conduction keeps its T_p (and maps back zeros)",
-            "        T[p] += dT",
+            "        T[p] = takes_grid_temperature(reach, T[p], dT, tg)",
             "    mct = mcap * T[p]"]
     return [
         "if mode == REMAP:",
@@ -763,7 +767,7 @@ def _g2p_particle(dim: int, thermal: bool, contact: bool, update: tuple | None) 
         _zeros([f"vp{c}" for c in AXES[:dim]] + [f"dv{c}" for c in AXES[:dim]]),
         _zeros([m.format("b") for m in matrix]),
         _zeros([m.format("l") for m in matrix]),
-        *([_zeros(["dT"] + [f"tq{c}" for c in AXES[:dim]]), "kp = conductivity[p]"] if thermal else []),
+        *([_zeros(["dT", "tg", "reach"] + [f"tq{c}" for c in AXES[:dim]]), "kp = conductivity[p]"] if thermal else []),
         *_field_shift(contact),
         f"wdx = {_each('wx[{a}] * (({a} - fx) * h0)', 3)}   # (wx has 3 entries for every support)",
         *_stencil(dim, _g2p_gather(dim, thermal), gradients=True, contact=contact,
@@ -799,7 +803,7 @@ def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None, contract:
     return _shell(
         "g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,\n"
         "        flip, dt, d_inv, copies_mom, stress, material, bad"
-        + (",\n        capacity, T, conductivity, heat_flux, T_change, T_grid, remapped, copies_remapped"
+        + (",\n        capacity, T, conductivity, heat_flux, T_change, T_grid, held, remapped, copies_remapped"
            if thermal else "")
         + (",\n        body, field_of_body, n_nodes" if contact else "") + ")",
         "USL: v_p (PIC/FLIP blend), C_p = B_p D_p^-1, x_p += dt v_pic, and L_p, F_p, V_p\n"
@@ -811,9 +815,10 @@ def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None, contract:
         "    inv_h, cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS). `l_is_c` (MLS, USL): L_p,\n"
         "    which is C_p, is not written. `updates` (USL, KINEMATICS; where the module has a material's\n"
         "    update lines): `stress` is updated from L_p with the parameters `material`."
-        + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w T_change (T~_I - T_I) and sum w m c T_p into\n"
-           "    `remapped` (zeroed here); KINEMATICS also q_p = -k_p sum grad w T_grid, T_grid\n"
-           "    then being the remapped T_I^{t+dt}." if thermal else "")
+        + ("\n\n    Conduction (MUSL): REMAP also T_p += sum w T_change (T~_I - T_I) (T_p = sum w T_grid,\n"
+           "    T~_I then, where the stencil reaches a node `held` marks: thermal_kernels.\n"
+           "    takes_grid_temperature) and sum w m c T_p into `remapped` (zeroed here); KINEMATICS\n"
+           "    also q_p = -k_p sum grad w T_grid, T_grid then being the remapped T_I^{t+dt}." if thermal else "")
         + ("\n\n    Contact (a field per body): every node is node + field_of_body[body[p]] * n_nodes."
            if contact else ""),
         ["support, mode_, affine_, blend_, mls_, l_is_c_, updates_ = variant",

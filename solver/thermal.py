@@ -9,7 +9,7 @@ the same phases, on the same stencil and time step as the mechanics (Algorithm 9
 | begin_step    |                   | the temperature conditions' values at t and t + dt            |
 | after_forces  | 3-7               | C_I, (C T)_I, Q_I^int by P2G; ghost sums                       |
 | before_update | 9-10              | T_I^t, boundary heat (flux, convection), T~_I^{t+dt}, T*; halo |
-| after_g2p     | 12-15             | T_p, the remapped T_I^{t+dt} (ghost sums, T*, halo), q_p       |
+| after_g2p     | 12-15             | T_p (the grid's T~ next to held nodes), remapped T_I^{t+dt}, q_p |
 
 The flux q_p comes from the remapped grid temperature (line 13), as [R] insists.
 The heat of plastic work (Johnson-Cook's Taylor-Quinney term) is added to T_p by the
@@ -228,6 +228,11 @@ class Conduction:
         self.copies_heat = np.zeros((sim.threads - 1, n, 3))
         self.copies_remapped = np.zeros((sim.threads - 1, n))
         self.held = sim.domain.owned(self._held_whole, sim.grid)
+        # 1 at the held nodes (every field), 0 elsewhere: a particle whose stencil reaches one
+        # takes the grid's temperature (thermal_kernels.takes_grid_temperature)
+        self.held_mark = np.zeros(n)
+        thermal_kernels.hold(self.held.node, np.ones(self.held.node.size), self.n_nodes, self.held_mark)
+        sim.domain.share_nodes(self.held_mark)
         self.faces = sim.domain.owned(self._faces.whole, sim.grid)
         self.T_now = self.held.value.copy()   # T* at t; held.value is T* at t + dt
         # contact: the fields exchange heat where the bodies touch; friction heats them there
@@ -304,8 +309,8 @@ class Conduction:
             self._exchange(sim)
         if not fused:
             self.remapped.fill(0.0)
-            thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, p.mass, x["heat_capacity"],
-                                      x["temperature"], self.remapped, self.copies_remapped)
+            thermal_kernels.g2p_remap(sim.spec, s.idx, s.w, self.T_old, self.T_new, self.held_mark, p.mass,
+                                      x["heat_capacity"], x["temperature"], self.remapped, self.copies_remapped)
         sim.domain.sum_ghosts(self.remapped)
         self._over_nodes(thermal_kernels.remapped_temperature, thermal_kernels.remapped_temperature_block,
                          self.heat, self.remapped, self.cutoff, self.T_new)

@@ -192,31 +192,49 @@ def deposit_heat(heat, touching, n_nodes, cutoff, added, T_new):
 
 
 @njit(parallel=True, cache=True)
-def g2p_remap(spec, idx, w, T_old, T_new, mass, capacity, T, remapped, copies):
-    """T_p += sum_I phi_I (T~_I - T_I) (line 12), then sum_p phi_I m_p c_p T_p into
-    `remapped` (line 13, before the division by C_I)."""
+def g2p_remap(spec, idx, w, T_old, T_new, held, mass, capacity, T, remapped, copies):
+    """T_p += sum_I phi_I (T~_I - T_I) (line 12), or T_p = sum_I phi_I T~_I where the particle's
+    stencil reaches a held node (`held` 1 there, else 0: `takes_grid_temperature`), then
+    sum_p phi_I m_p c_p T_p into `remapped` (line 13, before the division by C_I)."""
     dims, nodes = spec
     blocks = copies.shape[0] + 1
     bounds = block_bounds(w.shape[0], blocks)
     for t in prange(blocks):
-        _g2p_remap_block(nodes, bounds[t], bounds[t + 1], idx, w, T_old, T_new, mass, capacity, T,
+        _g2p_remap_block(nodes, bounds[t], bounds[t + 1], idx, w, T_old, T_new, held, mass, capacity, T,
                          own(t, remapped, copies))
     if blocks > 1:
         add_node_copies(remapped, copies)
 
 
 @njit(cache=True)
-def _g2p_remap_block(nodes, start, stop, idx, w, T_old, T_new, mass, capacity, T, remapped):
+def takes_grid_temperature(reach: float, T_p: float, change: float, grid: float) -> float:
+    """The particle's new temperature: FLIP, T_p + sum phi_I (T~_I - T_I), unless its stencil
+    reaches a held node (`reach` = sum phi_I over held nodes > 0), where it takes the grid's
+    sum phi_I T~_I. A held node's T_I^t is T* itself, not the particles' (C T)_I / C_I, so its
+    FLIP increment T*(t + dt) - T*(t) never passes on the difference between the two: the
+    particle next to it kept the start temperature's share of that node (half the jump of E12's
+    last cell, docs/benchmarks.md "Heat"). The held node is a heat reservoir, so the heat this
+    changes is what the condition supplies; the particles whose stencil reaches no held node
+    keep FLIP's exact balance."""
+    return grid if reach > 0.0 else T_p + change
+
+
+@njit(cache=True)
+def _g2p_remap_block(nodes, start, stop, idx, w, T_old, T_new, held, mass, capacity, T, remapped):
     nk = len(nodes)
     for p in range(start, stop):
         mc = mass[p] * capacity[p]
         if mc == 0.0:
             continue
         dT = 0.0
+        grid = 0.0
+        reach = 0.0
         for k in range(nk):
             node = idx[p, k]
             dT += w[p, k] * (T_new[node] - T_old[node])
-        T[p] += dT
+            grid += w[p, k] * T_new[node]
+            reach += w[p, k] * held[node]
+        T[p] = takes_grid_temperature(reach, T[p], dT, grid)
         mct = mc * T[p]
         for k in range(nk):
             remapped[idx[p, k]] += w[p, k] * mct

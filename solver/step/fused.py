@@ -295,7 +295,7 @@ class FusedPhases(Phases):
             return ()
         x = self.sim.particles.extra   # (the REMAP kernel zeroes remapped)
         return (x["heat_capacity"], x["temperature"], x["conductivity"], x["heat_flux"], conduction.T_change,
-                conduction.T_new, conduction.remapped, conduction.copies_remapped)
+                conduction.T_new, conduction.held_mark, conduction.remapped, conduction.copies_remapped)
 
     # -- contact with a field per body (nothing without it) -----------------------------------
 

@@ -82,6 +82,28 @@ def bar_errors(cells: int, dt: float, times=(0.0075, 0.03, 0.05), dim: int = 1, 
     return out
 
 
+def held_neighbour_errors(cells: int, dt: float, t: float) -> list[tuple[float, float]]:
+    """E12 at t: for the particle of each end cell (whose stencil reaches a held node), (its
+    distance from the exact series, the bound it is held to): the largest nodal error of its
+    cell's two nodes, which it interpolates (thermal_kernels.takes_grid_temperature), plus
+    linear interpolation's h^2 / 8 max |T_xx| over the cell (T_xx = T_t, by differences of the
+    series)."""
+    sim = ExplicitMPM(load_scene(bar_scene(cells, dt, t)))
+    advance_to(sim, t, dt)
+    h = 1.0 / cells
+    nodes = sim.grid.node_positions()[:, 0]
+    nodal = np.abs(sim.conduction.grid_temperature() - bar_exact(nodes, sim.time))
+    x, T = sim.particles.x[:, 0], sim.particles.extra["temperature"]
+    out = []
+    for p in (np.argmin(x), np.argmax(x)):
+        cell = int(x[p] // h)
+        span = np.linspace(cell * h, (cell + 1) * h, 21)
+        curvature = np.max(np.abs(bar_exact(span, sim.time + 1e-6) - bar_exact(span, sim.time - 1e-6))) / 2e-6
+        bound = max(nodal[cell], nodal[cell + 1]) + h * h / 8 * curvature
+        out.append((float(abs(T[p] - bar_exact(x[p:p + 1], sim.time)[0])), float(bound)))
+    return out
+
+
 def plate_scene(cells: int, dt: float, end: float = 0.05) -> dict:
     faces = ("x-", "x+", "y-", "y+")
     return {"dimension": 2, "method": {"scheme": "musl"},
