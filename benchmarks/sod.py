@@ -4,9 +4,10 @@
 
 Runs examples/sod_shock_tube.json (400 cells, 3 particles per cell, cubic B-splines,
 cfl 0.5, t = 0.2) with its artificial viscosity, without it, at smaller time steps
-(cfl 0.1 and 0.025), with MLS instead of FLIP, and with linear hats (the example
-before issue 18) at cfl 0.5 and 0.025, and prints the table of docs/benchmarks.md "Sod": L1 density
-error, the left plateau pressure, shock and contact positions (in cells) and the
+(cfl 0.1 and 0.025), with MLS instead of FLIP, with linear hats (the example
+before issue 18) at cfl 0.5 and 0.025, and without the method and viscosity keys (the
+ideal gas's defaults, issue 51; and those with linear hats named), and prints the table
+of docs/benchmarks.md "Sod": L1 density error, the left plateau pressure, shock and contact positions (in cells) and the
 wall time. Writes docs/images/sod.png: density, velocity and pressure at the
 particles against the exact solution, and the pressure mapped to the grid and back.
 """
@@ -27,7 +28,7 @@ from exact_riemann import SOD_RIGHT  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from mpm_cases import Case  # noqa: E402
-from test_sod_shock_tube import EXACT, H, X0, sod_scene  # noqa: E402
+from test_sod_shock_tube import EXACT, H, X0, defaults_scene, sod_scene  # noqa: E402
 
 from solver import run  # noqa: E402
 
@@ -59,11 +60,15 @@ def main() -> int:
                 ("MLS, cfl 0.5", True, 0.5, {"transfer": "mls"}), ("MLS, cfl 0.025", True, 0.025, {"transfer": "mls"}),
                 ("linear hats, cfl 0.5", True, 0.5, {"shape_function": "linear"}),
                 ("linear hats, cfl 0.025", True, 0.025, {"shape_function": "linear"})]
+    # issue 51: the scene without its method and viscosity keys (the gas's defaults), and with linear hats named
+    variants += [(f"defaults, cfl {cfl}", None, cfl, {}) for cfl in (0.5, 0.2, 0.1, 0.025)]
+    variants += [(f"defaults but linear hats named, cfl {cfl}", None, cfl, {"shape_function": "linear"})
+                 for cfl in (0.5, 0.2, 0.05)]
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for label, av, cfl, method in variants:
-            scene = sod_scene(av)
+            scene = defaults_scene(cfl, method) if av is None else sod_scene(av)
             scene["time"]["cfl"] = cfl
             scene["method"].update(method)
             scene["output"]["fields"].append("pressure_smoothed")

@@ -291,6 +291,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     )
     rows = [
         ("particles", f"{summary.particles:,}  ({bodies})"),
+        ("method", _method_line(scene.method)),
         ("grid nodes", f"{summary.grid_nodes:,}  ({' x '.join(map(str, summary.grid_shape))} cells)"),
         ("time step", f"{summary.dt:.6g}" + ("" if scene.time.dt else "  (adaptive, estimated)")),
         ("estimated steps", f"{summary.estimated_steps:,}"),
@@ -303,6 +304,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for warning in summary.warnings:
         print(f"  warning: {warning['path']}: {warning['message']}")
     return EXIT_OK
+
+
+def _method_line(method) -> str:
+    """The scheme, shape function and transfer the run will use, the defaults resolved
+    (a material's own default included: Scene._material_method_defaults)."""
+    return f"{method.formulation} {method.scheme}, {method.shape_function}, {method.transfer}"
 
 
 def _cost_model_source() -> str:

@@ -819,6 +819,26 @@ class Scene(SceneModel):
         return value
 
     @model_validator(mode="after")
+    def _material_method_defaults(self) -> "Scene":
+        """The method keys the scene leaves out take the default its materials set
+        (BaseMaterial.method_defaults: the ideal gas's cubic B-splines), where they agree and the
+        method allows it; a key the scene gives is kept. The one place a default depends on the
+        material: the scene holds the resolved method (`mpm validate` prints it)."""
+        wanted: dict[str, set] = {}
+        for material in self.materials.values():
+            for key, value in material.method_defaults.items():
+                wanted.setdefault(key, set()).add(value)
+        given = self.method.model_dump(exclude_unset=True)
+        resolved = {key: values.pop() for key, values in wanted.items()
+                    if len(values) == 1 and key not in given}
+        if resolved:
+            try:
+                self.method = Method.model_validate({**given, **resolved})
+            except ValidationError:   # (a formulation the material's choice does not work with)
+                pass
+        return self
+
+    @model_validator(mode="after")
     def _consistent(self) -> "Scene":
         problems = _cross_checks(self)
         if problems:

@@ -8,7 +8,7 @@ scene, this module loads without numba.
 """
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, Field, Strict, field_validator
 from pydantic_core import PydanticCustomError
@@ -68,6 +68,8 @@ class BaseMaterial(SceneModel):
     thermal_conductivity: NonNegative | None = None   # k, W/(m K); None or 0: no conduction in it
     specific_heat: Positive | None = None              # c, J/(kg K)
     thermal_expansion: Real | None = None              # alpha, 1/K; None or 0: no thermal strain
+    # method keys this material sets where the scene leaves them out (Scene._material_method_defaults)
+    method_defaults: ClassVar[dict[str, Any]] = {}
 
     @field_validator("model", check_fields=False)
     @classmethod

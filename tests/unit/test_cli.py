@@ -42,6 +42,16 @@ def test_validate_prints_the_summary(capsys):
     assert "estimated run time" in out
 
 
+def test_validate_prints_the_method_with_a_material_s_default(tmp_path, capsys):
+    """The ideal gas's shape function default (Scene._material_method_defaults) is shown as resolved."""
+    scene = json.loads((EXAMPLES / "sod_shock_tube.json").read_text())
+    del scene["method"]
+    assert cli.main(["validate", scene_file(tmp_path, scene)]) == 0
+    assert "method              ulmpm musl, cubic_bspline, flip" in capsys.readouterr().out
+    assert cli.main(["validate", str(EXAMPLES / "two_disks.json")]) == 0
+    assert "method              ulmpm musl, linear, flip" in capsys.readouterr().out
+
+
 def test_validate_prints_every_error_with_its_path(tmp_path, capsys):
     scene = json.loads((EXAMPLES / "two_disks.json").read_text())
     scene["bodies"][1]["geometry"]["radius"] = -0.2

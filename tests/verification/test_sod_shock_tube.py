@@ -103,3 +103,48 @@ def test_mass_and_energy_are_conserved(with_av):
     assert total[0] == pytest.approx(1.375, rel=1e-12)
     # the step's first-order energy error stays below 1% (measured 2e-5 at cfl 0.5)
     assert abs(total[-1] - total[0]) < 0.01 * total[0]
+
+
+# -- the defaults (issue 51) ---------------------------------------------------------------
+
+def defaults_scene(cfl, method=None):
+    """The example with the method and the material's keys left out (but the model): what a
+    user writes who names only the gas and its bodies; `method` what the scene gives of its own."""
+    scene = sod_scene()
+    scene["materials"]["air"] = {"model": "ideal_gas"}
+    scene["method"] = dict(method or {})
+    scene["time"]["cfl"] = cfl
+    return scene
+
+
+def defaults_l1(tmp_path, cfl, method=None):
+    from mpm_cases import Case
+
+    from solver import run
+    case = Case(run(defaults_scene(cfl, method), tmp_path / f"cfl{cfl}"))
+    t, x, rho, *_ = profiles(case)
+    assert case.result.status == "complete"
+    return float(np.mean(np.abs(rho - EXACT.sample(x, t, X0)[0])))
+
+
+def test_a_gas_scene_that_names_no_shape_function_gets_the_cubic_splines():
+    """The ideal gas's method default (IdealGas.method_defaults), resolved once as the scene is
+    read; a shape function the scene names is kept (and so its results)."""
+    from solver.scene import load_scene
+    assert load_scene(defaults_scene(0.5)).method.shape_function == "cubic_bspline"
+    assert load_scene(defaults_scene(0.5, {"shape_function": "linear"})).method.shape_function == "linear"
+    assert load_scene(defaults_scene(0.5, {"transfer": "pic"})).method.model_dump()["shape_function"] == "cubic_bspline"
+
+
+# The bound: the 0.0146 of test_l1_density_error_with_artificial_viscosity (a first-order
+# scheme's smeared shock and plateaus and rarefaction within 5 %), inside the issue's 0.015.
+# Measured 0.0044 at cfl 0.5 and 0.2 (docs/benchmarks.md "Sod"); linear hats, which the
+# gas took by default before, 0.039 and 0.021.
+def test_the_defaults_meet_the_l1_bound_at_cfl_one_half(tmp_path):
+    assert defaults_l1(tmp_path, 0.5) < 0.0146
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("cfl", [0.2, 0.1, 0.025])
+def test_the_defaults_meet_the_l1_bound_at_smaller_steps(tmp_path, cfl):
+    assert defaults_l1(tmp_path, cfl) < 0.0146
