@@ -24,8 +24,8 @@ def vertical_axis(gravity) -> tuple[int, float]:
 
 
 def apply(scene, particles) -> None:
-    """Set the initial stress of every body that asks for one (after the materials'
-    own start values: it replaces them)."""
+    """Set the initial stress of every body that asks for one (before the materials' own
+    start values, solver/state.py: Cam-Clay starts its p_c from it)."""
     for index, body in enumerate(scene.bodies):
         if body.initial_stress is None:
             continue

@@ -1206,7 +1206,7 @@ def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str,
 
 
 def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> list[tuple[str, str]]:
-    problems = []
+    problems = material.body_problems(path, body)
     if isinstance(material, IdealGas):
         for name in ("initial_density", "initial_pressure"):
             if getattr(body, name) is None:

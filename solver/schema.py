@@ -86,6 +86,10 @@ class BaseMaterial(SceneModel):
         time step estimate; 0 where no wave travels."""
         return self.dilatational_wave_speed() or 0.0
 
+    def body_problems(self, path: str, body: Any) -> list[tuple[str, str]]:
+        """What a body made of this material lacks (path: the body's, "bodies[i]")."""
+        return []
+
     @property
     def conducts(self) -> bool:
         return bool(self.thermal_conductivity)

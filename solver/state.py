@@ -281,6 +281,8 @@ def material_slices(scene, body: np.ndarray) -> dict[str, slice]:
 
 def make_materials(scene, slices: dict[str, slice], particles: Particles) -> list[tuple[object, slice]]:
     models = [(materials.create(scene.materials[name], scene.dimension), sl) for name, sl in slices.items()]
-    materials.init_particles(models, particles, scene)
+    # the initial stress first: a model may start its state from it (Cam-Clay's p_c); no
+    # model that sets its own start stress (a gas) takes an initial_stress
     initial_stress.apply(scene, particles)
+    materials.init_particles(models, particles, scene)
     return models

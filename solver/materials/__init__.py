@@ -49,8 +49,8 @@ __all__ = ["REGISTRY", "MaterialType", "StateVariable", "create", "init_particle
 
 # The materials of this package, in the order the scene's union lists them
 # (error messages name the models in this order).
-BUILTIN = ("linear_elastic", "neo_hookean", "j2_plasticity", "johnson_cook", "drucker_prager", "mohr_coulomb", "fluid",
-           "ideal_gas", "rigid")
+BUILTIN = ("linear_elastic", "neo_hookean", "j2_plasticity", "johnson_cook", "drucker_prager", "mohr_coulomb",
+           "modified_cam_clay", "fluid", "ideal_gas", "rigid")
 
 for _name in BUILTIN:
     register(import_module(f"solver.materials.{_name}").MATERIAL)

@@ -151,7 +151,7 @@ class TestRegistration:
         assert errors == {
             "materials.bar.model": "unknown model 'spring'; expected one of 'linear_elastic', 'neo_hookean', "
                                    "'j2_plasticity', 'johnson_cook', 'drucker_prager', "
-                                   "'mohr_coulomb', 'fluid', 'ideal_gas', 'rigid'",
+                                   "'mohr_coulomb', 'modified_cam_clay', 'fluid', 'ideal_gas', 'rigid'",
             "output.fields[2]": "unknown output field 'spring_strain'; known fields: "
                                 + ", ".join(sorted(capabilities.OUTPUT_FIELDS)),
         }
@@ -193,7 +193,8 @@ class TestBuiltFromTheRegistries:
     def test_output_fields_are_the_fields_module_and_the_materials_state(self):
         assert set(capabilities.OUTPUT_FIELDS) == set(fields.FIELDS) | set(materials.output_fields())
         assert materials.output_fields() == pytest.approx(
-            {"plastic_strain": 0.0, "damage": 0.0, "temperature": math.nan, "yield_state": 0.0, "internal_energy": 0.0},
+            {"plastic_strain": 0.0, "damage": 0.0, "temperature": math.nan, "yield_state": 0.0, "internal_energy": 0.0,
+             "preconsolidation_pressure": 0.0},
             nan_ok=True)
 
     def test_shape_function_values_are_the_registry(self):
@@ -228,7 +229,7 @@ class TestDocumentation:
         assert list(rows) == list(materials.names())
         elastic = set(ElasticMaterial.model_fields)
         for name, material in materials.REGISTRY.items():
-            keys = set(material.schema.model_fields) - {"model"}
+            keys = {field.alias or key for key, field in material.schema.model_fields.items()} - {"model"}
             if "the elastic keys" in rows[name][0]:
                 keys -= elastic
             keys -= set(THERMAL_KEYS)   # every material's: documented once, in the heat section

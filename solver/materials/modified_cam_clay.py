@@ -1,0 +1,106 @@
+"""The `modified_cam_clay` material: Modified Cam-Clay (Roscoe & Burland 1968) for clay,
+in effective stress (compression positive in the formulas: p' = -tr(sigma')/3, q =
+sqrt(3/2 s:s); the solver's stress stays tension positive):
+
+    f = q^2 / M^2 + p' (p' - p_c) <= 0          (the yield ellipse; M = critical_state_slope)
+    K = (1 + e) p' / kappa,  G = 3 K (1 - 2 nu) / (2 (1 + nu))      (pressure-dependent elasticity)
+    dp_c = p_c (1 + e) / (lambda - kappa) d eps_v^p                 (hardening, associated flow)
+
+with e the current void ratio, (1 + e) = (1 + initial_void_ratio) V / V0. The return
+mapping is implicit (backward Euler, closest point: solver/materials/kernels/modified_cam_clay.py).
+
+The model has no stiffness at p' = 0, so a body of it needs an initial stress (the body's
+`initial_stress`, geostatic): validation asks for one. Where p' is below
+`minimum_pressure` (near a free surface, in tension) the stiffness is that at the minimum.
+Where the initial stress lies outside the ellipse of `preconsolidation_pressure`, p_c
+starts at the ellipse through it (normally consolidated there).
+
+The stress it updates is the effective stress: a pore fluid (issue 52) adds its pressure
+on top; until the solver has one, `pore_fluid` is refused by name.
+"""
+
+import math
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import Field, Strict, field_validator, model_validator
+
+from solver.materials.drucker_prager import FRICTIONAL_STATE
+from solver.materials.registry import MaterialType, StateVariable
+from solver.schema import BaseMaterial, Positive, fmt, problems_at, scene_error
+
+PRECONSOLIDATION = "preconsolidation_pressure"
+MINIMUM_PRESSURE_FRACTION = 0.01   # of preconsolidation_pressure: the default minimum_pressure
+
+
+def _initial_preconsolidation(config, scene, body_index):
+    return np.full(body_index.shape[0], config.preconsolidation_pressure)
+
+
+class ModifiedCamClay(BaseMaterial):
+    model: Literal["modified_cam_clay"]
+    density: Positive
+    poisson_ratio: Annotated[float, Strict(), Field(ge=0, lt=0.5)]
+    lambda_: Positive = Field(alias="lambda")      # slope of the normal compression line in e - ln p'
+    kappa: Positive                                # slope of the swelling lines
+    critical_state_slope: Positive                 # M, q = M p' at the critical state
+    preconsolidation_pressure: Positive            # p_c at the start (Pa)
+    initial_void_ratio: Positive                   # e0
+    minimum_pressure: Positive | None = None       # p' floor of the stiffness; None: 1 % of p_c
+    pore_fluid: Any = None                         # two-phase soil (issue 52): refused until supported
+
+    @field_validator("pore_fluid")
+    @classmethod
+    def _no_pore_fluid(cls, value: Any) -> Any:
+        if value is not None:
+            raise scene_error("a pore fluid (two-phase saturated soil) is not supported yet; this material "
+                              "models the effective stress of a drained soil")
+        return value
+
+    @model_validator(mode="after")
+    def _slopes(self) -> "ModifiedCamClay":
+        if self.kappa >= self.lambda_:
+            raise problems_at([("kappa", f"must be < lambda ({fmt(self.lambda_)}): the swelling line is "
+                                         "flatter than the normal compression line")])
+        return self
+
+    @property
+    def floor_pressure(self) -> float:
+        if self.minimum_pressure is not None:
+            return self.minimum_pressure
+        return MINIMUM_PRESSURE_FRACTION * self.preconsolidation_pressure
+
+    def shear_to_bulk(self) -> float:
+        """G / K from Poisson's ratio."""
+        nu = self.poisson_ratio
+        return 3.0 * (1.0 - 2.0 * nu) / (2.0 * (1.0 + nu))
+
+    def wave_speed_at(self, pressure: float, void_ratio: float) -> float:
+        """sqrt((K + 4 G / 3) / rho) at mean effective stress `pressure` (floored)."""
+        bulk = (1.0 + void_ratio) * max(pressure, self.floor_pressure) / self.kappa
+        return math.sqrt(bulk * (1.0 + 4.0 * self.shear_to_bulk() / 3.0) / self.density)
+
+    def dilatational_wave_speed(self) -> float:
+        """At p' = preconsolidation_pressure, the stiffest state inside the initial ellipse (the
+        runs follow the current stiffness: solver/materials/kernels/modified_cam_clay.py)."""
+        return self.wave_speed_at(self.preconsolidation_pressure, self.initial_void_ratio)
+
+    def default_k0(self) -> float:
+        """Jaky's 1 - sin(phi_cs), with sin(phi_cs) = 3 M / (6 + M) (triaxial compression)."""
+        m = self.critical_state_slope
+        return 1.0 - min(3.0 * m / (6.0 + m), 1.0)
+
+    def body_problems(self, path: str, body: Any) -> list[tuple[str, str]]:
+        if body.initial_stress is None:
+            return [(f"{path}.initial_stress", "required for a 'modified_cam_clay' material: its stiffness "
+                                               "K = (1 + e) p' / kappa vanishes in a stress-free body "
+                                               "(give {\"type\": \"geostatic\"})")]
+        return []
+
+
+MATERIAL = MaterialType(
+    schema=ModifiedCamClay,
+    solver_class="solver.materials.kernels.modified_cam_clay:ModifiedCamClay",
+    state=(*FRICTIONAL_STATE,
+           StateVariable(PRECONSOLIDATION, output=True, initial=_initial_preconsolidation)),
+)
