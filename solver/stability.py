@@ -73,7 +73,11 @@ def time_step_problems(scene) -> list[tuple[str, str]]:
 
 
 def _wave_speed(scene, body) -> float:
-    return scene.materials[body.material].initial_wave_speed(body)
+    """The material's initial wave speed in `body`; from the scene where the material needs
+    it (`initial_wave_speed_in(scene, body)`: Cam-Clay's stiffness follows the geostatic stress)."""
+    material = scene.materials[body.material]
+    in_scene = getattr(material, "initial_wave_speed_in", None)
+    return in_scene(scene, body) if in_scene is not None else material.initial_wave_speed(body)
 
 
 def _largest_speed(scene, body) -> float:

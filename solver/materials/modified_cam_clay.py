@@ -25,6 +25,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, Strict, field_validator, model_validator
 
+from solver.initial_stress import vertical_axis
 from solver.materials.drucker_prager import FRICTIONAL_STATE
 from solver.materials.registry import MaterialType, StateVariable
 from solver.schema import BaseMaterial, Positive, fmt, problems_at, scene_error
@@ -81,9 +82,20 @@ class ModifiedCamClay(BaseMaterial):
         return math.sqrt(bulk * (1.0 + 4.0 * self.shear_to_bulk() / 3.0) / self.density)
 
     def dilatational_wave_speed(self) -> float:
-        """At p' = preconsolidation_pressure, the stiffest state inside the initial ellipse (the
-        runs follow the current stiffness: solver/materials/kernels/modified_cam_clay.py)."""
+        """At p' = preconsolidation_pressure, where the scene is not known (the stability limit
+        uses `initial_wave_speed_in`; runs follow the current stiffness)."""
         return self.wave_speed_at(self.preconsolidation_pressure, self.initial_void_ratio)
+
+    def initial_wave_speed_in(self, scene: Any, body: Any) -> float:
+        """At the largest p' of the body's geostatic stress, p' = (1 + 2 k0) / 3 rho g d with its
+        box's height as the depth d (solver/initial_stress.py): what the run starts from."""
+        if body.initial_stress is None or not any(scene.gravity or ()):
+            return self.dilatational_wave_speed()
+        axis, _ = vertical_axis(scene.gravity)
+        lower, upper = body.geometry.shape().bounding_box()
+        k0 = body.initial_stress.k0 if body.initial_stress.k0 is not None else self.default_k0()
+        sigma_v = self.density * abs(float(scene.gravity[axis])) * float(upper[axis] - lower[axis])
+        return self.wave_speed_at((1.0 + 2.0 * k0) / 3.0 * sigma_v, self.initial_void_ratio)
 
     def default_k0(self) -> float:
         """Jaky's 1 - sin(phi_cs), with sin(phi_cs) = 3 M / (6 + M) (triaxial compression)."""
