@@ -23,7 +23,7 @@ import math
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, Strict, field_validator, model_validator
+from pydantic import Field, Strict, field_validator, model_serializer, model_validator
 
 from solver.initial_stress import vertical_axis
 from solver.materials.drucker_prager import FRICTIONAL_STATE
@@ -57,6 +57,15 @@ class ModifiedCamClay(BaseMaterial):
             raise scene_error("a pore fluid (two-phase saturated soil) is not supported yet; this material "
                               "models the effective stress of a drained soil")
         return value
+
+    @model_serializer(mode="wrap")
+    def _named_lambda(self, handler):
+        """Dumped as the scene names it ("lambda"), by alias or not: the service stores
+        scenes with model_dump_json() and loads them again."""
+        data = handler(self)
+        if isinstance(data, dict) and "lambda_" in data:
+            data["lambda"] = data.pop("lambda_")
+        return data
 
     @model_validator(mode="after")
     def _slopes(self) -> "ModifiedCamClay":

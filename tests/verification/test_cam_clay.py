@@ -258,3 +258,15 @@ def test_scene_rules():
     scene["materials"]["sand"]["kappa"] = KAPPA
     with pytest.raises(SceneError, match=r"bodies\[0\]\.initial_stress: required for a 'modified_cam_clay'"):
         load_scene(scene)
+
+
+def test_scene_dumps_and_loads_again():
+    """`lambda` (a Python keyword: the field is lambda_) is dumped under its scene name, so
+    a stored scene (the service's model_dump_json) loads again."""
+    import json
+    from solver.scene import load_scene
+    from test_geostatic import column
+    scene = load_scene(column(1.0, {"type": "geostatic"}, material=CLAY))
+    dumped = json.loads(scene.model_dump_json())
+    assert dumped["materials"]["sand"]["lambda"] == LAMBDA and "lambda_" not in dumped["materials"]["sand"]
+    assert load_scene(dumped) == scene
