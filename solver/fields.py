@@ -27,6 +27,22 @@ def von_mises(stress: np.ndarray) -> np.ndarray:
     return np.sqrt(1.5 * np.einsum("pij,pij->p", dev, dev))
 
 
+def total_stress(particles) -> np.ndarray:
+    """sigma = sigma' - p I: in a saturated soil (solver/pore_fluid.py) the particles' `stress`
+    is the effective one and the pore pressure is apart; elsewhere the stress itself."""
+    pore = particles.extra.get("pore_pressure")
+    if pore is None:
+        return particles.stress
+    return particles.stress - pore[:, None, None] * np.eye(3)
+
+
+def _pore_pressure(sim) -> np.ndarray:
+    """p, positive in compression; zero where no material has a pore fluid."""
+    p = sim.particles
+    pore = p.extra.get("pore_pressure")
+    return pore if pore is not None else np.zeros(p.count)
+
+
 def through_grid(sim, values: np.ndarray) -> np.ndarray:
     """Particle values mapped to the nodes like the momentum (mass-weighted) and
     interpolated back ([R] 6.1.4 shows Sod's pressure at the nodes: smoother).
@@ -87,18 +103,20 @@ def _heat_flux(sim) -> np.ndarray:
 FIELDS = {
     "position": lambda sim: sim.particles.x,
     "velocity": lambda sim: sim.particles.v,
-    "stress": lambda sim: voigt(sim.particles.stress),
+    "stress": lambda sim: voigt(total_stress(sim.particles)),
     "mass": lambda sim: sim.particles.mass,
     "volume": lambda sim: sim.particles.volume,
     "density": lambda sim: sim.particles.mass / sim.particles.volume,
-    "pressure": lambda sim: pressure(sim.particles.stress),
-    "pressure_smoothed": lambda sim: through_grid(sim, pressure(sim.particles.stress)),
-    "von_mises": lambda sim: von_mises(sim.particles.stress),
+    "pressure": lambda sim: pressure(total_stress(sim.particles)),
+    "pressure_smoothed": lambda sim: through_grid(sim, pressure(total_stress(sim.particles))),
+    "von_mises": lambda sim: von_mises(sim.particles.stress),   # (the pore pressure has no deviator)
     "velocity_magnitude": lambda sim: np.linalg.norm(sim.particles.v, axis=1),
     "deformation_gradient": lambda sim: sim.particles.F.reshape(sim.particles.count, -1),
     "strain_energy_density": _strain_energy_density,
     "heat_flux": _heat_flux,
     "particle_domain": _particle_domain,
+    "pore_pressure": _pore_pressure,
+    "effective_stress": lambda sim: voigt(sim.particles.stress),
 }
 """The fields of every scene; the materials add their state's (plastic_strain, damage,
 temperature, internal_energy, ...: solver.materials.output_fields)."""

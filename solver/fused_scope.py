@@ -3,6 +3,7 @@ the service's run-time estimates (solver/cost.py) ask it too."""
 from __future__ import annotations
 
 from solver import shape
+from solver.pore_fluid_schema import saturated
 from solver.thermal_schema import conducts
 
 FUSED_SHAPES = frozenset({"linear", "quadratic_bspline"})   # the 1D weights `_axis` writes out
@@ -18,12 +19,14 @@ def supports(scene) -> bool:
     are fused with the mass-gradient normals ([R] 5.12, scattered by the fused P2G; the density
     gradient's cell pass reads the particles apart) and without conduction (the fields'
     exchange and the frictional heat enter T~_I^{t+dt} before the particles take it, as the
-    frictional walls' do); rigid bodies, which contact also meets, are not fused at all."""
+    frictional walls' do); rigid bodies, which contact also meets, are not fused at all, nor
+    saturated soils (solver/pore_fluid.py)."""
     method = scene.method
     return (method.formulation == "ulmpm" and method.scheme in ("usl", "musl")
             and method.shape_function in FUSED_SHAPES and not scene.axisymmetric
             and scene.dimension in (2, 3)
             and not any(m.model == "rigid" for m in scene.materials.values())
+            and not saturated(scene)   # the pore fluid's passes read the stored stencil
             and (method.scheme == "musl" or not conducts(scene))
             and not (conducts(scene) and _friction_walls(scene))   # their heat enters T~ before the remap
             and (not scene.contact.fields or _fused_contact(scene))

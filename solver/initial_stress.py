@@ -8,13 +8,17 @@ column by column (a slope too):
 
 with d the depth below the body's top in the particle's vertical column: the highest
 particle of the column plus half a particle spacing (the surface of the material the
-particles stand for). k0 defaults to Jaky's 1 - sin(friction_angle). Without it a
+particles stand for). k0 defaults to Jaky's 1 - sin(friction_angle). In a saturated
+soil (a material with a pore fluid) the stress is the effective one: sigma_v less the
+pore pressure's rise below the column's top, k0 applied to that (solver/pore_fluid.py). Without it a
 body starts stress-free and collapses onto itself under a gravity shock: waves of
 amplitude rho g H in stress, g H / c in velocity, ring for many periods.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from solver.pore_fluid_schema import initial_pore_pressure
 
 
 def vertical_axis(gravity) -> tuple[int, float]:
@@ -44,10 +48,21 @@ def geostatic_stress(scene, body, x: np.ndarray, density: np.ndarray) -> np.ndar
     material = scene.materials[body.material]
     k0 = body.initial_stress.k0 if body.initial_stress.k0 is not None else material.default_k0()
     vertical = -density * g * depth
+    if material.pore_fluid is not None:   # a saturated soil: its stress model holds the effective stress
+        vertical = vertical + pore_pressure_rise(scene, body, x, depth, axis, up)
     stress = np.zeros((x.shape[0], 3, 3))
     for a in range(3):
         stress[:, a, a] = vertical if a == axis else k0 * vertical
     return stress
+
+
+def pore_pressure_rise(scene, body, x: np.ndarray, depth: np.ndarray, axis: int, up: float) -> np.ndarray:
+    """p(x) - p(top of the column): the share of the total geostatic stress the pore water
+    carries (the buoyancy below the water table), so that sigma' = sigma - (-p I) starts from
+    the weight less the water's. A column under water thus starts at sigma'_v = -(rho - rho_w) g d."""
+    top = x.copy()
+    top[:, axis] += up * depth
+    return initial_pore_pressure(scene, body, x) - initial_pore_pressure(scene, body, top)
 
 
 def depth_below_top(x: np.ndarray, axis: int, up: float, spacing: np.ndarray) -> np.ndarray:

@@ -68,6 +68,7 @@ from solver.schema import (
     scene_error,
 )
 from solver.thermal_schema import thermal_problems
+from solver.pore_fluid_schema import pore_fluid_problems
 
 # Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
 SPACE_VARIABLES = ("x", "y", "z")
@@ -83,7 +84,7 @@ _DEFINITIONS: ContextVar[dict[str, str] | None] = ContextVar("scene_expressions"
 CONTRACT_OUTPUT_FIELDS = frozenset({
     "position", "velocity", "stress", "mass", "volume", "density", "pressure",
     "plastic_strain", "damage", "temperature", "velocity_magnitude", "von_mises",
-    "deformation_gradient", "strain_energy_density",
+    "deformation_gradient", "strain_energy_density", "pore_pressure", "effective_stress",
 })
 
 
@@ -447,6 +448,27 @@ class GeostaticStress(SceneModel):
     k0: NonNegative | None = None   # None: 1 - sin(friction_angle) of the body's material
 
 
+class InitialPorePressure(SceneModel):
+    """A saturated body's pore pressure at t = 0 (solver/pore_fluid.py): "hydrostatic" below
+    `water_table` (a height: y in 2D, z in 3D; 0 above it) under the scene's gravity, or "uniform"."""
+
+    type: Literal["hydrostatic", "uniform"]
+    water_table: Real | None = None   # hydrostatic
+    pressure: Real | None = None      # uniform, Pa (positive in compression)
+
+    @model_validator(mode="after")
+    def _keys_of_type(self) -> "InitialPorePressure":
+        needed, unused = ("water_table", "pressure") if self.type == "hydrostatic" else ("pressure", "water_table")
+        problems = []
+        if getattr(self, needed) is None:
+            problems.append((needed, f"required with type {self.type!r}"))
+        if getattr(self, unused) is not None:
+            problems.append((unused, f"not used with type {self.type!r}"))
+        if problems:
+            raise problems_at(problems)
+        return self
+
+
 class Body(SceneModel):
     name: Annotated[str, Field(min_length=1)]
     material: str
@@ -458,6 +480,7 @@ class Body(SceneModel):
     initial_pressure: NonNegative | None = None  # ideal_gas bodies only
     velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
     initial_stress: GeostaticStress | None = None   # None: stress-free
+    initial_pore_pressure: InitialPorePressure | None = None   # saturated bodies; None: 0
 
 
 # where a velocity condition holds: the geometries defined by numbers alone (no files)
@@ -499,22 +522,27 @@ class WallCondition(SceneModel):
 Face = Literal["x-", "x+", "y-", "y+", "z-", "z+"]
 
 
-class TemperatureCondition(SceneModel):
+class _HeldOnNodes(SceneModel):
+    """A grid field's value held on a face or on the nodes inside a box."""
+
+    face: Face | None = None
+    where: BoxGeometry | None = None
+
+    @model_validator(mode="after")
+    def _face_or_box(self) -> "_HeldOnNodes":
+        if (self.face is None) == (self.where is None):
+            raise scene_error("give either face or where (a box of nodes)")
+        return self
+
+
+class TemperatureCondition(_HeldOnNodes):
     """The grid temperature held on a face or on the nodes inside a box ([R] Algorithm 8,
     lines 10 and 14; solver/thermal.py)."""
 
     type: Literal["temperature"]
-    face: Face | None = None
-    where: BoxGeometry | None = None
     temperature: TimeValue
 
     _type_supported = supported("type", "BOUNDARY_CONDITIONS")
-
-    @model_validator(mode="after")
-    def _face_or_box(self) -> "TemperatureCondition":
-        if (self.face is None) == (self.where is None):
-            raise scene_error("give either face or where (a box of nodes)")
-        return self
 
 
 class HeatFluxCondition(SceneModel):
@@ -541,6 +569,16 @@ class ConvectionCondition(SceneModel):
 THERMAL_CONDITIONS = (TemperatureCondition, HeatFluxCondition, ConvectionCondition)
 
 
+class PorePressureCondition(_HeldOnNodes):
+    """A drained face (or box of nodes): the grid's pore pressure held there (solver/pore_fluid.py);
+    faces without one are impervious."""
+
+    type: Literal["pore_pressure"]
+    pressure: TimeValue
+
+    _type_supported = supported("type", "BOUNDARY_CONDITIONS")
+
+
 class AbsorbingCondition(SceneModel):
     """Viscous (Lysmer-Kuhlemeyer) dashpots on a face of the grid (solver/absorbing.py)."""
 
@@ -551,7 +589,8 @@ class AbsorbingCondition(SceneModel):
 
 
 BoundaryCondition = Annotated[Union[VelocityCondition, WallCondition, TemperatureCondition, HeatFluxCondition,
-                                    ConvectionCondition, AbsorbingCondition], Field(discriminator="type")]
+                                    ConvectionCondition, AbsorbingCondition, PorePressureCondition],
+                              Field(discriminator="type")]
 
 
 # --------------------------------------------------------------------------- loads, damping
@@ -973,6 +1012,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     problems += _frame_problems(scene)
     problems += _condition_problems(scene, length_ok)
     problems += thermal_problems(scene, THERMAL_CONDITIONS, length_ok)
+    problems += pore_fluid_problems(scene, PorePressureCondition, length_ok)
     problems += _contact_problems(scene, names)
     problems += _tool_problems(scene, length_ok, expressions_ok)
     if grid_ok:

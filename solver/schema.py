@@ -56,6 +56,21 @@ class SceneModel(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
+class PoreFluid(SceneModel):
+    """The water filling a saturated soil's pores (solver/pore_fluid.py): with it the material's
+    stress model works on the effective stress and the pore pressure is a field of its own."""
+
+    bulk_modulus: Positive              # K_w, Pa
+    density: Positive                   # rho_w, kg/m^3
+    hydraulic_conductivity: Positive    # k, m/s (Darcy's, for water under g_n = 9.81 m/s^2)
+    porosity: Annotated[float, Strict(), Field(gt=0, lt=1)]   # n
+
+    @property
+    def storage_modulus(self) -> float:
+        """K_w / n: the pore pressure's stiffness against the skeleton's volume change."""
+        return self.bulk_modulus / self.porosity
+
+
 class BaseMaterial(SceneModel):
     """A material entry of the scene. A subclass declares ``model: Literal["<name>"]``,
     its keys, and the wave speed the time step estimate starts from.
@@ -70,6 +85,7 @@ class BaseMaterial(SceneModel):
     thermal_expansion: Real | None = None              # alpha, 1/K; None or 0: no thermal strain
     # method keys this material sets where the scene leaves them out (Scene._material_method_defaults)
     method_defaults: ClassVar[dict[str, Any]] = {}
+    pore_fluid: PoreFluid | None = None                # saturated soil (solid skeletons only)
 
     @field_validator("model", check_fields=False)
     @classmethod

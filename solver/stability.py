@@ -17,6 +17,7 @@ import numpy as np
 
 from solver.expressions import compile_expression
 from solver.scene import SPACE_VARIABLES, TIME_VARIABLES
+from solver.pore_fluid_schema import diffusion_time_step, undrained_wave_speed
 from solver.thermal_schema import conduction_time_step
 
 _SAMPLES_PER_AXIS = 17  # points per axis of a body's box where initial velocities are sampled
@@ -50,7 +51,14 @@ def conduction_limit(scene) -> Limit | None:
                                                       f"{found[1]!r}")
 
 
-LIMITS: list[Callable] = [wave_limit, conduction_limit]
+def pore_pressure_limit(scene) -> Limit | None:
+    """The pore pressure's diffusion limit h^2 / (2 d k K_w / (n rho_w g_n)) (solver/pore_fluid_schema.py)."""
+    found = diffusion_time_step(scene)
+    return None if found is None else Limit(found[0], f"the pore pressure's diffusion limit h^2 n rho_w g_n / "
+                                                      f"(2 d k K_w) of material {found[1]!r}")
+
+
+LIMITS: list[Callable] = [wave_limit, conduction_limit, pore_pressure_limit]
 
 
 def stable_limit(scene) -> Limit | None:
@@ -73,11 +81,13 @@ def time_step_problems(scene) -> list[tuple[str, str]]:
 
 
 def _wave_speed(scene, body) -> float:
-    """The material's initial wave speed in `body`; from the scene where the material needs
-    it (`initial_wave_speed_in(scene, body)`: Cam-Clay's stiffness follows the geostatic stress)."""
+    """The body's P-wave speed: the material's initial one, from the scene where the material
+    needs it (`initial_wave_speed_in(scene, body)`: Cam-Clay's stiffness follows the geostatic
+    stress); a saturated soil's with the pore fluid's stiffness."""
     material = scene.materials[body.material]
     in_scene = getattr(material, "initial_wave_speed_in", None)
-    return in_scene(scene, body) if in_scene is not None else material.initial_wave_speed(body)
+    dry = in_scene(scene, body) if in_scene is not None else material.initial_wave_speed(body)
+    return undrained_wave_speed(material, dry)
 
 
 def _largest_speed(scene, body) -> float:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import energy, kernels, parallel, shape, step, thermal, threads
+from solver import energy, kernels, parallel, pore_fluid, shape, step, thermal, threads
 from solver.axisymmetric import Axisymmetry
 from solver.boundary import ConditionReactions
 from solver.contact import domain_support
@@ -60,6 +60,7 @@ class ExplicitMPM:
         thermal.setup(scene, self.particles)   # nothing without thermal keys
         self.conduction = thermal.Conduction(scene, self.particles) if conducts(scene) else None
         self.expansion = thermal.ThermalExpansion(scene, self._model_of) if expands(scene) else None
+        self.pore_fluid = pore_fluid.create(scene, self.particles)   # saturated soils only
         self.shape = shape.get(method.shape_function)
         # CPDI starts on a compact stencil and widens it when a domain needs it (solver/step/general.py)
         self.stencil_support = self.shape.COMPACT_SUPPORT or self.shape.SUPPORT
@@ -175,10 +176,15 @@ class ExplicitMPM:
     def stable_time_step(self, cfl: float) -> float:
         """dt = cfl * min_i h_i / max_p(c_dil + |v_ip|) (review eq. 2.73), times the formulation's factor;
         at most cfl times conduction's limit and the tools' penalty limit (solver/tools.py), where they are."""
-        speed = self.domain.max(self.wave_speed) + self.domain.max(kernels.max_speed_per_axis(self.particles.v))
+        wave = self.domain.max(self.wave_speed)
+        if self.pore_fluid is not None:   # the pore fluid stiffens the mixture against volume change
+            wave = self.pore_fluid.undrained_speed(wave)
+        speed = wave + self.domain.max(kernels.max_speed_per_axis(self.particles.v))
         dt = float(cfl * np.min(self.grid.h / np.maximum(speed, 1e-300))) * self.formulation.time_step_factor(self)
         if self.conduction is not None:   # and the explicit conduction's limit rho c h^2 / (2 d k)
             dt = min(dt, self.conduction.stable_time_step(cfl))
+        if self.pore_fluid is not None:   # and the pore pressure's diffusion limit
+            dt = min(dt, self.pore_fluid.stable_time_step(cfl))
         if self.tools is not None:   # and the penalty springs of the particles near a tool (its last step)
             dt = min(dt, cfl * self.domain.min(self.tools.time_step))
         return dt

@@ -143,10 +143,16 @@ def _value(spec, definitions=None):
 
 def held_temperatures(scene, grid) -> _NodeValues:
     """The `temperature` conditions' nodes of the whole grid and their values."""
+    return held_node_values(scene, grid, "temperature", "temperature")
+
+
+def held_node_values(scene, grid, condition_type: str, key: str) -> _NodeValues:
+    """The nodes of the whole grid that the conditions of `condition_type` hold (a face or a box
+    of nodes each) and their values (the conditions' `key`: a number or an expression in t)."""
     nodes, values, expressions, start = [], [], [], 0
     positions = None
     for bc in scene.boundary_conditions:
-        if bc.type != "temperature":
+        if bc.type != condition_type:
             continue
         if bc.face is not None:
             sel, _ = _face_nodes(grid, bc.face)
@@ -156,7 +162,7 @@ def held_temperatures(scene, grid) -> _NodeValues:
             inside = np.all((positions >= np.asarray(bc.where.lower) - tol)
                             & (positions <= np.asarray(bc.where.upper) + tol), axis=1)
             sel = np.flatnonzero(inside)
-        number, expression = _value(bc.temperature, scene.expressions)
+        number, expression = _value(getattr(bc, key), scene.expressions)
         nodes.append(sel)
         values.append(np.full(sel.size, number))
         if expression is not None:

@@ -26,6 +26,7 @@ boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress),
+the pore fluid of a saturated soil (begin_step, after_forces, after_stress: solver/pore_fluid.py),
 F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (the tracked
 corners of cpdi_q4 and cpdi_tet4, after_g2p).
 
@@ -41,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import contact, kernels
+from solver import contact, kernels, pore_fluid
 from solver.absorbing import AbsorbingFaces
 from solver.damping import Damping
 from solver.thermal import make_conduction, make_expansion
@@ -186,11 +187,12 @@ def _damping(sim):
 # Each entry makes the hook a scene needs (or None). The order is the order their effects
 # compose in: rigid bodies impose (or the bodies' fields meet, rigid ones included) before
 # the boundary conditions, which win where both apply; the loads' work is counted after the
-# rigid bodies moved; damping acts on the forces of every other hook; F-bar averages the
+# rigid bodies moved; damping acts on the forces of every other hook (the pore pressure's too);
+# the pore pressure takes the L_p of the stress update before F-bar puts the particles' own back; F-bar averages the
 # volume after the hoop terms changed it and puts the particles' own F, L and V back after
 # every other stress hook.
 HOOKS = [_rigid_bodies, _field_contact, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _tools,
-         _absorbing_faces, _damping, make_conduction, make_expansion, _fbar, _shape_hook]
+         _absorbing_faces, _damping, make_conduction, make_expansion, pore_fluid.make, _fbar, _shape_hook]
 
 
 def scene_hooks(sim) -> Hooks:

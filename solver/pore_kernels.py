@@ -1,0 +1,49 @@
+"""Numba kernels of the pore pressure (solver/pore_fluid.py) on the step's stored stencil
+(idx, w, dw at x_p^t). Serial: two scatters a step over the saturated particles, cheap
+beside the mechanics' passes, and free of races without per-thread copies.
+
+The nodal array `storage` is (n_nodes, 3): the storage S_I = sum_p phi_I V_p n_p / K_w,
+the storage-weighted pressure sum_p phi_I V_p (n_p / K_w) p_p, and the flux rate
+Q_I = sum_p V_p q_p . grad phi_I (the weak form of -div q; impervious faces are natural).
+"""
+from __future__ import annotations
+
+from solver.jit import njit
+
+
+@njit(cache=True)
+def pressure_to_grid(idx, w, dw, volume, compliance, pressure, storage, force):
+    """S_I and (S p)_I, and the pore pressure's share of the internal force: the total stress
+    is sigma' - p I, so f_I += sum_p V_p p_p grad phi_I (the material's P2G took sigma')."""
+    dim = dw.shape[2]
+    for p in range(idx.shape[0]):
+        s = volume[p] * compliance[p]
+        if s == 0.0:   # a dry material
+            continue
+        vp = volume[p] * pressure[p]
+        for k in range(idx.shape[1]):
+            node = idx[p, k]
+            storage[node, 0] += w[p, k] * s
+            storage[node, 1] += w[p, k] * s * pressure[p]
+            for a in range(dim):
+                force[node, a] += vp * dw[p, k, a]
+
+
+@njit(cache=True)
+def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volume, flux, storage):
+    """q_p = -(k / (rho_w g_n)) (grad p - rho_w g) with grad p = sum_I p_I grad phi_I(x_p)
+    (Darcy), and Q_I += V_p q_p . grad phi_I."""
+    dim = dw.shape[2]
+    for p in range(idx.shape[0]):
+        if mobility[p] == 0.0:
+            continue
+        for a in range(dim):
+            gradient = 0.0
+            for k in range(idx.shape[1]):
+                gradient += grid_pressure[idx[p, k]] * dw[p, k, a]
+            flux[p, a] = -mobility[p] * (gradient - fluid_density[p] * gravity[a])
+        for k in range(idx.shape[1]):
+            q = 0.0
+            for a in range(dim):
+                q += flux[p, a] * dw[p, k, a]
+            storage[idx[p, k], 2] += volume[p] * q

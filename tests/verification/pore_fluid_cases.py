@@ -1,0 +1,141 @@
+"""The saturated soil (two-phase, solver/pore_fluid.py) verification cases
+(tests/verification/test_pore_fluid.py, benchmarks/two_phase.py): scenes, exact solutions
+and the measured errors.
+
+- Terzaghi's 1D consolidation: a column of height H on an impervious, fixed base, laterally
+  confined (slip walls), drained at its top, under a load q. It starts from the undrained
+  state, p = q and sigma' = 0 (`initial_pore_pressure` uniform: the total stress -q balances
+  the load), so nothing rings. With a compressible fluid and an elastic skeleton (nu = 0:
+  the constrained modulus E_oed = E) the 1D mass balance and equilibrium give the diffusion
+  equation dp/dt = c_v d2p/dz2 with c_v = (k / (rho_w g_n)) / (1/E_oed + n/K_w) (Terzaghi's
+  with the fluid's storage added to the skeleton's), p = 0 at the top, dp/dz = 0 at the base:
+
+      p(z, t) / q = sum_m 2/M sin(M z/H) exp(-M^2 Tv),   M = pi (2m + 1) / 2,  Tv = c_v t / H^2
+      U(Tv) = 1 - sum_m 2/M^2 exp(-M^2 Tv)               (z from the drained top)
+
+- Undrained loading: the same column sealed (no drained face), loaded suddenly, with local
+  damping to let the waves die: p = q (K_w/n) / (K_w/n + E_oed), which is q within 0.05 % for
+  water in a soft skeleton (B ~ 1).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from solver.pore_fluid_schema import G_N
+from solver.scene import load_scene
+from solver.stepper import ExplicitMPM
+
+HEIGHT = 1.0
+LOAD = 1.0e4           # q, Pa
+SKELETON = {"density": 2000.0, "youngs_modulus": 1.0e6, "poisson_ratio": 0.0,
+            "friction_angle": 30.0, "cohesion": 1.0e5}   # strong enough to stay elastic
+# a fluid as compressible as 9 times the skeleton's stiffness (K_w / n = 9 E_oed): B = 0.9 in an
+# undrained step, and a pressure diffusion only 10 times c_v, so the explicit step is not tied
+# to water's K_w (the exact solution takes the compressibility in)
+FLUID = {"bulk_modulus": 1.5e6, "density": 1000.0, "hydraulic_conductivity": 0.0025, "porosity": 0.5}
+
+
+def consolidation_coefficient(fluid: dict = FLUID, skeleton: dict = SKELETON) -> float:
+    """c_v = (k / (rho_w g_n)) / (1 / E_oed + n / K_w), E_oed = E for nu = 0."""
+    mobility = fluid["hydraulic_conductivity"] / (fluid["density"] * G_N)
+    return mobility / (1.0 / skeleton["youngs_modulus"] + fluid["porosity"] / fluid["bulk_modulus"])
+
+
+def _factors(terms: int) -> np.ndarray:
+    return np.pi * (2 * np.arange(terms) + 1) / 2
+
+
+def terzaghi_pressure(depth: np.ndarray, tv: float, terms: int = 200) -> np.ndarray:
+    """p / q at depth z below the drained top (200 terms: the tail is below exp(-(200 pi)^2 Tv))."""
+    m = _factors(terms)[:, None]
+    return np.sum(2 / m * np.sin(m * np.asarray(depth)[None, :] / HEIGHT) * np.exp(-m * m * tv), axis=0)
+
+
+def terzaghi_degree(tv: float, terms: int = 2000) -> float:
+    """U(Tv) = 1 - sum 2/M^2 exp(-M^2 Tv) (the tail of 2000 terms is below 1e-4 at Tv = 0)."""
+    m = _factors(terms)
+    return float(1 - np.sum(2 / m**2 * np.exp(-m * m * tv)))
+
+
+def column_scene(cells: int, end: float, drained: bool = True, model: str = "drucker_prager",
+                 fluid: dict = FLUID, dim: int = 2, damping: float | None = None) -> dict:
+    """The column, `cells` cells high and one wide (two in 3D: x and y), 2 particles per cell and axis."""
+    h = HEIGHT / cells
+    width = [h] * (dim - 1)
+    vertical = "xyz"[dim - 1]
+    upper = width + [HEIGHT]
+    walls = [{"type": "wall", "face": f"{'xyz'[a]}{side}", "mode": "slip"} for a in range(dim) for side in "-+"
+             if not (a == dim - 1 and side == "+")]
+    conditions = walls + ([{"type": "pore_pressure", "face": f"{vertical}+", "pressure": 0.0}] if drained else [])
+    scene = {
+        "dimension": dim, "method": {"scheme": "musl", "shape_function": "linear"},
+        "grid": {"lower": [0.0] * dim, "upper": upper, "cell_size": h},
+        "materials": {"soil": {"model": model, **SKELETON, "pore_fluid": dict(fluid)}},
+        "bodies": [{"name": "soil", "material": "soil", "particles_per_cell": 2,
+                    "geometry": {"type": "box", "lower": [0.0] * dim, "upper": upper},
+                    **({"initial_pore_pressure": {"type": "uniform", "pressure": LOAD}} if drained else {})}],
+        "boundary_conditions": conditions,
+        "loads": [{"type": "traction", "body": "soil",
+                   "where": {"type": "box", "lower": [0.0] * (dim - 1) + [HEIGHT - h / 2], "upper": upper},
+                   "traction": [0.0] * (dim - 1) + [-LOAD]}],
+        "time": {"end": end, "cfl": 0.5},
+        "output": {"frames": 2, "fields": ["pore_pressure", "effective_stress"]},
+    }
+    if model == "linear_elastic":   # (no strength keys)
+        for key in ("friction_angle", "cohesion"):
+            scene["materials"]["soil"].pop(key)
+    if damping is not None:
+        scene["damping"] = {"type": "local", "coefficient": damping}
+    return scene
+
+
+def run(scene: dict, until: float) -> ExplicitMPM:
+    sim = ExplicitMPM(load_scene(scene))
+    while sim.time < until * (1 - 1e-12):
+        sim.advance(min(sim.stable_time_step(scene["time"]["cfl"]), until - sim.time))
+    return sim
+
+
+def consolidation(cells: int, tvs=(0.05, 0.197, 0.848), dim: int = 2, model: str = "drucker_prager"
+                  ) -> dict[float, tuple[float, float]]:
+    """{Tv: (U measured, largest isochrone error max |p - p_exact| / q)}; U from the mean pore
+    pressure, U = 1 - mean p / q (the column's particles all have one volume at the start)."""
+    cv = consolidation_coefficient()
+    times = [tv * HEIGHT**2 / cv for tv in tvs]
+    scene = column_scene(cells, end=times[-1], dim=dim, model=model)
+    sim = ExplicitMPM(load_scene(scene))
+    out = {}
+    for tv, t in zip(tvs, times):
+        while sim.time < t * (1 - 1e-12):
+            sim.advance(min(sim.stable_time_step(0.5), t - sim.time))
+        p = sim.particles.extra["pore_pressure"]
+        depth = HEIGHT - sim.particles.x[:, dim - 1]
+        measured = 1 - float(np.dot(sim.particles.volume, p) / np.sum(sim.particles.volume)) / LOAD
+        error = float(np.max(np.abs(p / LOAD - terzaghi_pressure(depth, tv))))
+        out[tv] = (measured, error)
+    return out
+
+
+def undrained(fluid: dict, end: float, cells: int = 10) -> tuple[float, float, float]:
+    """(the water's share of the total vertical stress p / (p - sigma'_zz), the mean p / q, both over
+    the particles below the top cell, and the exact share (K_w/n) / (K_w/n + E_oed)) of the sealed
+    column loaded at t = 0 and damped to rest. The top cell is left out: the load reaches the grid
+    through the top row of particles' stencils, so it carries 3/4 of q (a surface load's spread in MPM)."""
+    scene = column_scene(cells, end=end, drained=False, fluid=fluid, damping=0.5)
+    sim = run(scene, end)
+    p = sim.particles.extra["pore_pressure"]
+    dim = scene["dimension"]
+    below = sim.particles.x[:, dim - 1] < HEIGHT - HEIGHT / cells
+    effective = sim.particles.stress[below, dim - 1, dim - 1]
+    share = float(np.mean(p[below] / (p[below] - effective)))
+    storage = fluid["bulk_modulus"] / fluid["porosity"]
+    return share, float(np.mean(p[below])) / LOAD, storage / (storage + SKELETON["youngs_modulus"])
+
+
+WATER = {"bulk_modulus": 2.2e9, "density": 1000.0, "hydraulic_conductivity": 1.0e-8, "porosity": 0.5}
+
+
+def isochrone_order(coarse: float, fine: float) -> float:
+    return math.log2(coarse / fine)

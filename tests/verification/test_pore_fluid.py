@@ -1,0 +1,65 @@
+"""Saturated soil (two-phase u-p MPM, solver/pore_fluid.py) against Terzaghi's consolidation
+and the undrained response (the cases are in pore_fluid_cases.py; errors and times in
+docs/benchmarks.md, "Saturated soil", from benchmarks/two_phase.py)."""
+from __future__ import annotations
+
+import pytest
+
+import pore_fluid_cases as pc
+
+
+class TestTerzaghi:
+    """The column drained at its top, from the undrained state p = q. The degree of
+    consolidation U is the mean of p; its exact values are 0.5 at Tv = 0.197 and 0.9 at
+    Tv = 0.848. The tolerance 0.01 is the discretisation's share: on 10 cells the measured
+    error is 0.0013 and 0.0024, on 20 cells 0.004 (the dynamic start of the drainage:
+    consolidation here takes ~230 wave transits, not infinitely many), so 0.01 leaves
+    room for neither a wrong c_v (c_v 5 % off moves U(0.197) by 0.013) nor a wrong drainage."""
+
+    def test_the_degree_of_consolidation_follows_terzaghi(self):
+        measured = pc.consolidation(10)
+        for tv, exact in ((0.197, 0.5), (0.848, 0.9)):
+            assert abs(measured[tv][0] - exact) < 0.01, f"Tv = {tv}: U = {measured[tv][0]:.4f}, exact {exact}"
+        # the isochrone at Tv = 0.848, particle by particle: 1.25 % of q measured on 10 cells
+        assert measured[0.848][1] < 0.03
+
+    @pytest.mark.slow
+    def test_the_isochrones_converge_at_first_order_in_h(self):
+        """max |p - p_exact| / q over the particles at Tv = 0.05 and 0.197, on 10, 20 and 40 cells:
+        the particle values carry the cell-constant skeleton's volume change (an O(h) error
+        near the steep front), so first order is what the scheme can give; measured 0.93-1.0."""
+        errors = [pc.consolidation(cells, tvs=(0.05, 0.197)) for cells in (10, 20, 40)]
+        for tv in (0.05, 0.197):
+            for coarse, fine in zip(errors, errors[1:]):
+                order = pc.isochrone_order(coarse[tv][1], fine[tv][1])
+                assert order > 0.8, f"Tv = {tv}: observed order {order:.2f}"
+            assert abs(errors[-1][tv][0] - pc.terzaghi_degree(tv)) < 0.01
+
+    @pytest.mark.slow
+    @pytest.mark.parametrize("model", ["mohr_coulomb", "linear_elastic"])
+    def test_every_soil_model_consolidates_alike(self, model):
+        measured = pc.consolidation(10, model=model)
+        assert abs(measured[0.197][0] - 0.5) < 0.01
+
+    @pytest.mark.slow
+    def test_a_3d_column_consolidates_as_in_2d(self):
+        measured = pc.consolidation(10, dim=3)
+        assert abs(measured[0.197][0] - 0.5) < 0.01
+        assert abs(measured[0.848][0] - 0.9) < 0.01
+
+
+class TestUndrained:
+    """A sealed column loaded at once and damped to rest: the pore water takes the share
+    (K_w/n) / (K_w/n + E_oed) of the load, B ~ 1 for water. Asserted to 1e-4 (water: the
+    exact share is 0.99977, a share of 1 - or a skeleton carrying it all - fails) and to
+    0.005 for a fluid three times the skeleton's stiffness (share 0.75; measured 0.7473)."""
+
+    def test_water_carries_the_load(self):
+        share, mean, exact = pc.undrained(pc.WATER, end=0.02)
+        assert share == pytest.approx(exact, abs=1e-4)
+        assert mean == pytest.approx(exact, abs=1e-3)
+
+    def test_a_compressible_fluid_shares_the_load_with_the_skeleton(self):
+        share, mean, exact = pc.undrained({**pc.FLUID, "hydraulic_conductivity": 1.0e-8}, end=0.5)
+        assert share == pytest.approx(exact, abs=5e-3)
+        assert mean == pytest.approx(exact, abs=5e-3)
