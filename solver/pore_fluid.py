@@ -83,6 +83,7 @@ class PoreFluid:
         self.storage = np.zeros((n, 3))
         self.grid_pressure = np.zeros(n)
         self.change = np.zeros(n)
+        self.squeeze = np.zeros(n)
         self.held = sim.domain.owned(self._held_whole, sim.grid)
         return self
 
@@ -114,12 +115,14 @@ class PoreFluid:
         """The skeleton's part, S_I dp_I = -dt sum_p phi_I V_p tr(L_p) from the L_p the stress
         took (0 on the drained nodes), and the particles take the step's nodal change."""
         p, s, x = sim.particles, sim.stencil, sim.particles.extra
-        wet = x["pore_compliance"] > 0
-        squeezed = np.where(wet, p.volume * np.einsum("pii->p", p.L), 0.0)
-        swell = np.bincount(s.idx.ravel(), (s.w * squeezed[:, None]).ravel(), minlength=self.change.size)
-        swell[self.held.node] = 0.0
-        self.change -= dt * np.divide(swell, self.storage[:, 0], out=np.zeros_like(swell), where=self.stored)
-        x["pore_pressure"] += np.where(wet, np.einsum("pk,pk->p", s.w, self.change[s.idx]), 0.0)
+        squeeze = self.squeeze
+        squeeze.fill(0.0)
+        pore_kernels.squeeze_to_grid(s.idx, s.w, p.volume, p.L, x["pore_compliance"], squeeze)
+        squeeze[self.held.node] = 0.0
+        np.divide(squeeze, self.storage[:, 0], out=squeeze, where=self.stored)
+        squeeze[~self.stored] = 0.0
+        self.change -= dt * squeeze
+        pore_kernels.take_change(s.idx, s.w, self.change, x["pore_compliance"], x["pore_pressure"])
 
     def undrained_speed(self, wave_speed: float) -> float:
         """The fastest wave with the fluid's stiffness added: sqrt(c^2 + (K_w / n) / rho)."""

@@ -47,3 +47,31 @@ def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volu
             for a in range(dim):
                 q += flux[p, a] * dw[p, k, a]
             storage[idx[p, k], 2] += volume[p] * q
+
+
+@njit(cache=True)
+def squeeze_to_grid(idx, w, volume, L, compliance, squeeze):
+    """squeeze_I = sum_p phi_I V_p tr(L_p) over the saturated particles: the weak form of the
+    skeleton's volume change, which the nodal pressure takes as -dt squeeze_I / S_I."""
+    dim = L.shape[1]
+    for p in range(idx.shape[0]):
+        if compliance[p] == 0.0:
+            continue
+        rate = 0.0
+        for a in range(dim):
+            rate += L[p, a, a]
+        vr = volume[p] * rate
+        for k in range(idx.shape[1]):
+            squeeze[idx[p, k]] += w[p, k] * vr
+
+
+@njit(cache=True)
+def take_change(idx, w, change, compliance, pressure):
+    """p_p += sum_I phi_I dp_I for the saturated particles (a dry one keeps its 0)."""
+    for p in range(idx.shape[0]):
+        if compliance[p] == 0.0:
+            continue
+        total = 0.0
+        for k in range(idx.shape[1]):
+            total += w[p, k] * change[idx[p, k]]
+        pressure[p] += total
