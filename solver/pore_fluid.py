@@ -10,15 +10,18 @@ The pore pressure of each particle follows the fluid's mass balance with Darcy's
     (n / K_w) dp/dt = -div v_s - div q,     q = -(k / (rho_w g_n)) (grad p - rho_w g),
 
 split into two explicit parts a step:
-- the skeleton's volume change, at the particle, from the L_p the stress update used:
-  p += -(K_w / n) tr(L_p) dt (after_stress), so that the undrained response is exact:
-  an instant load is carried by p and sigma' in the ratio of K_w / n to the skeleton's
-  constrained modulus;
+- the skeleton's volume change, from the L_p the stress update used (after_stress), in the
+  weak form on the grid, S_I dp_I = -dt sum_p phi_I V_p tr(L_p), so that the undrained
+  response holds: an instant load is carried by p and sigma' in the ratio of K_w / n to the
+  skeleton's constrained modulus (taken at the particle, p += -(K_w/n) tr(L_p) dt, the
+  cell-constant tr(L_p) of linear hats would leave a saw-tooth in p that the flow's nodal
+  changes never see);
 - the flow, on the grid (after_forces, with p^t): the storage-weighted nodal pressure
   p_I = sum_p phi_I V_p (n/K_w) p_p / S_I, held on the drained nodes (the `pore_pressure`
   conditions), q_p from its gradient, the lumped weak form S_I dp_I/dt = sum_p V_p q_p .
   grad phi_I (impervious faces are the natural condition), and each particle takes the
-  change of its nodes, p_p += sum_I phi_I dp_I (as conduction's FLIP update, [R] Algorithm 8).
+  change of its nodes, p_p += sum_I phi_I dp_I (as conduction's FLIP update, [R] Algorithm 8),
+  once a step at end_step, both parts together.
   On a drained node the change is the one that brings the node's projected pressure to
   the held value (p* - p_I), so the particles along a drained face drain too (a node held
   only in the gradient leaves them at a share of their start pressure forever).
@@ -65,7 +68,8 @@ def setup(scene, particles) -> None:
 
 class PoreFluid:
     """The pore pressure as a hook of the step (after_forces: the flow and the force;
-    after_stress: the skeleton's volume change), made once a run and placed on each grid."""
+    after_stress: the skeleton's volume change; end_step: the particles take the step's
+    change), made once a run and placed on each grid."""
 
     def __init__(self, scene, particles):
         self.scene = scene
@@ -112,16 +116,20 @@ class PoreFluid:
         self.stored = stored
 
     def after_stress(self, sim, dt: float) -> None:
-        """The skeleton's part, S_I dp_I = -dt sum_p phi_I V_p tr(L_p) from the L_p the stress
-        took (0 on the drained nodes), and the particles take the step's nodal change."""
+        """The skeleton's part, from the L_p the stress took: squeeze_I = sum_p phi_I V_p tr(L_p)."""
         p, s, x = sim.particles, sim.stencil, sim.particles.extra
+        self.squeeze.fill(0.0)
+        pore_kernels.squeeze_to_grid(s.idx, s.w, p.volume, p.L, x["pore_compliance"], self.squeeze)
+
+    def end_step(self, sim, dt: float) -> None:
+        """S_I dp_I = -dt squeeze_I (0 on the drained nodes) joins the flow's change, and the
+        particles take it (here, not at after_stress: USF updates the stress before its P2G)."""
         squeeze = self.squeeze
-        squeeze.fill(0.0)
-        pore_kernels.squeeze_to_grid(s.idx, s.w, p.volume, p.L, x["pore_compliance"], squeeze)
         squeeze[self.held.node] = 0.0
         np.divide(squeeze, self.storage[:, 0], out=squeeze, where=self.stored)
         squeeze[~self.stored] = 0.0
         self.change -= dt * squeeze
+        s, x = sim.stencil, sim.particles.extra
         pore_kernels.take_change(s.idx, s.w, self.change, x["pore_compliance"], x["pore_pressure"])
 
     def undrained_speed(self, wave_speed: float) -> float:

@@ -95,12 +95,14 @@ def pore_fluid_problems(scene, condition_class, length_ok) -> list[tuple[str, st
 
 
 def _unsupported(scene) -> list[tuple[str, str]]:
-    """What the two-phase step (ULMPM, one process, one grid field) does not run yet."""
+    """What the two-phase step (ULMPM with USL or MUSL, one process, one grid field) does not run yet."""
     first = next(name for name, m in scene.materials.items() if m.pore_fluid is not None)
     path = f"materials.{first}.pore_fluid"
     problems = []
     if scene.method.formulation != "ulmpm":
         problems.append((path, f"is not supported yet with formulation {scene.method.formulation!r} (ulmpm only)"))
+    if scene.method.scheme == "usf":   # (a Terzaghi column went unstable: the pore force lags the stress)
+        problems.append((path, "is not supported yet with scheme 'usf' (usl and musl)"))
     if scene.axisymmetric:
         problems.append((path, "is not supported yet in an axisymmetric scene"))
     if scene.dimension == 1:

@@ -26,7 +26,7 @@ boundary conditions (begin_step, constrain), hoop terms, the body loads' work
 boundaries (before_update, their work at after_g2p: solver/absorbing.py), `damping`
 (before_update, its work at after_g2p: solver/damping.py), heat conduction (begin_step,
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress),
-the pore fluid of a saturated soil (begin_step, after_forces, after_stress: solver/pore_fluid.py),
+the pore fluid of a saturated soil (begin_step, after_forces, after_stress, end_step: solver/pore_fluid.py),
 F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (the tracked
 corners of cpdi_q4 and cpdi_tet4, after_g2p).
 

@@ -45,6 +45,7 @@ class TestValidation:
     @pytest.mark.parametrize("change, words", [
         ({"method": {"formulation": "tlmpm"}}, "formulation 'tlmpm'"),
         ({"axisymmetric": True}, "axisymmetric"),
+        ({"method": {"scheme": "usf"}}, "scheme 'usf'"),
         ({"contact": {"model": "friction"}}, "contact model 'friction'"),
     ])
     def test_what_the_two_phase_step_does_not_run_is_refused_naming_the_pore_fluid(self, change, words):
