@@ -79,6 +79,7 @@ class Restart:
     series: dict[str, np.ndarray]
     boundary_heat: float = 0.0   # heat in through heat_flux and convection faces (solver/thermal.py)
     tool_work: float = 0.0       # the tools' work, and where they are (solver/tools.py's state())
+    pore_work: float = 0.0       # the pore pressure's work on the mixture (solver/pore_fluid.py)
     tools: dict[str, np.ndarray] | None = None
     derived: tuple[str, ...] = ()   # the particle arrays that were a function of the state (Particles.derived)
 
@@ -127,6 +128,7 @@ class Checkpointer:
         particles = sim.domain.gather(sim.particles.arrays())   # all processes' particles, on rank 0
         heat = sim.thermal_series()   # (collective: every process sums its boundary heat)
         tool_work = float(sim.domain.sum([sim.tool_work])[0])   # (collective: each counts its particles)
+        pore_work = sim.pore_work()   # (collective too)
         tools = sim.tools.state() if sim.tools is not None else None   # (collective too)
         self.last_step, self.last_time = sim.step_count, time.monotonic()
         if particles is None:
@@ -139,7 +141,8 @@ class Checkpointer:
                                 frames_written=frames_written, external_work=sim.external_work,
                                 boundary_work=sim.boundary_work, damping_work=sim.damping_work,
                                 **({"boundary_heat": heat["boundary_heat"]} if heat else {}),
-                                tool_work=tool_work, derived=",".join(sim.particles.derived_names))
+                                tool_work=tool_work, pore_work=pore_work,
+                                derived=",".join(sim.particles.derived_names))
                 for name, values in (tools or {}).items():
                     h5.create_dataset(f"tools/{name}", data=values)
                 for name, array in particles.items():
@@ -202,6 +205,7 @@ def load(out_dir: Path, scene) -> Restart | None:
                       damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series,
                       boundary_heat=float(attrs.get("boundary_heat", 0.0)),
                       tool_work=float(attrs.get("tool_work", 0.0)), tools=tools,
+                      pore_work=float(attrs.get("pore_work", 0.0)),
                       derived=tuple(name for name in str(attrs.get("derived", "")).split(",") if name))
     source = _result_to_continue(Path(out_dir))
     try:
@@ -251,6 +255,8 @@ def _restore(sim, restart: Restart) -> None:
     sim.tool_work = restart.tool_work if sim.domain.is_root else 0.0   # (one process keeps the total)
     if sim.tools is not None and restart.tools is not None:
         sim.tools.restore(restart.tools, sim.domain.is_root)
+    if sim.pore_fluid is not None:   # (one process keeps the total)
+        sim.pore_fluid.work = restart.pore_work if sim.domain.is_root else 0.0
     if sim.conduction is not None:   # the total, kept by one process (the series sums them)
         sim.conduction.boundary_heat = restart.boundary_heat if sim.domain.is_root else 0.0
 

@@ -81,6 +81,9 @@ class PoreFluid:
         self.wave_squared = max(m.pore_fluid.storage_modulus / m.density
                                 for m in scene.materials.values() if getattr(m, "pore_fluid", None) is not None)
         self._held_whole = held_node_values(scene, grid_geometry(scene), "pore_pressure", "pressure")
+        # the pore pressure's work on the mixture, sum dt sum_p V_p p_p tr(L_p) (J): energy the fluid
+        # gave the mechanics (its stored energy, the flow), which the runner's energy check counts as supplied
+        self.work = 0.0
 
     def place(self, sim) -> "PoreFluid":
         n = sim.grid.mass.shape[0]
@@ -119,7 +122,8 @@ class PoreFluid:
         """The skeleton's part, from the L_p the stress took: squeeze_I = sum_p phi_I V_p tr(L_p)."""
         p, s, x = sim.particles, sim.stencil, sim.particles.extra
         self.squeeze.fill(0.0)
-        pore_kernels.squeeze_to_grid(s.idx, s.w, p.volume, p.L, x["pore_compliance"], self.squeeze)
+        self.work += dt * pore_kernels.squeeze_to_grid(s.idx, s.w, p.volume, p.L, x["pore_compliance"],
+                                                       x["pore_pressure"], self.squeeze)
 
     def end_step(self, sim, dt: float) -> None:
         """S_I dp_I = -dt squeeze_I (0 on the drained nodes) joins the flow's change, and the

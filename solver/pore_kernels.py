@@ -50,10 +50,12 @@ def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volu
 
 
 @njit(cache=True)
-def squeeze_to_grid(idx, w, volume, L, compliance, squeeze):
+def squeeze_to_grid(idx, w, volume, L, compliance, pressure, squeeze):
     """squeeze_I = sum_p phi_I V_p tr(L_p) over the saturated particles: the weak form of the
-    skeleton's volume change, which the nodal pressure takes as -dt squeeze_I / S_I."""
+    skeleton's volume change, which the nodal pressure takes as -dt squeeze_I / S_I. Returns
+    sum_p V_p p_p tr(L_p), the power of the pore pressure on the mixture."""
     dim = L.shape[1]
+    power = 0.0
     for p in range(idx.shape[0]):
         if compliance[p] == 0.0:
             continue
@@ -61,8 +63,10 @@ def squeeze_to_grid(idx, w, volume, L, compliance, squeeze):
         for a in range(dim):
             rate += L[p, a, a]
         vr = volume[p] * rate
+        power += pressure[p] * vr
         for k in range(idx.shape[1]):
             squeeze[idx[p, k]] += w[p, k] * vr
+    return power
 
 
 @njit(cache=True)

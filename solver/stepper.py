@@ -205,6 +205,13 @@ class ExplicitMPM:
             return 0.0
         return float(self.domain.sum([self.expansion.energy_bound(self)])[0])
 
+    def pore_work(self) -> float:
+        """The work the pore pressure of a saturated soil has done on the mixture so far (solver/pore_fluid.py),
+        summed over the processes: the growth check counts it as supplied; 0 in a dry scene."""
+        if self.pore_fluid is None:
+            return 0.0
+        return float(self.domain.sum([self.pore_fluid.work])[0])
+
     def thermal_series(self) -> dict[str, float]:
         """thermal_energy (sum m c T) and the heat that came in through heat_flux and
         convection faces, for a scene with conduction; nothing otherwise."""

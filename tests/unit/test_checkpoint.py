@@ -220,6 +220,24 @@ def test_a_conducting_run_resumes_to_the_same_temperatures_and_boundary_heat(tmp
     assert_same_result(reference.result_path, resumed.result_path)
 
 
+def test_a_saturated_run_resumes_to_the_same_pore_pressures(tmp_path, monkeypatch):
+    """The pore pressure and Darcy flux of a saturated soil (solver/pore_fluid.py) are carried."""
+    scene = column()
+    scene["materials"]["m"]["pore_fluid"] = {"bulk_modulus": 1.0e5, "density": 1000.0,
+                                             "hydraulic_conductivity": 1.0e-3, "porosity": 0.5}
+    scene["bodies"][0]["initial_pore_pressure"] = {"type": "hydrostatic", "water_table": 0.3}
+    scene["boundary_conditions"].append({"type": "pore_pressure", "pressure": 0.0,
+                                         "where": {"type": "box", "lower": [0.0, 0.29], "upper": [0.6, 0.31]}})
+    scene["output"]["fields"] += ["pore_pressure", "effective_stress"]
+    reference = run(scene, tmp_path / "reference")
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
+    assert stopped.status == "partial"
+    resumed = run(scene, tmp_path / "resumed", resume=True)
+    assert resumed.steps == reference.steps
+    assert_same_result(reference.result_path, resumed.result_path)
+
+
 def test_a_run_with_a_tool_resumes_to_the_same_result(tmp_path, monkeypatch):
     """A tool's displacement, its reaction impulses since the last row and its work are
     carried by the checkpoint (solver/tools.py): the resumed run's frames and series
