@@ -202,6 +202,17 @@ def test_the_checkpoint_replaces_the_previous_one_atomically(tmp_path, monkeypat
     assert all(src.startswith(".") and src.endswith(".tmp") for src, _ in saves)
 
 
+def assert_resumes_alike(scene, tmp_path, monkeypatch):
+    """A run stopped after 41 progress calls and resumed gives the uninterrupted run's result."""
+    reference = run(scene, tmp_path / "reference")
+    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
+    stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
+    assert stopped.status == "partial"
+    resumed = run(scene, tmp_path / "resumed", resume=True)
+    assert resumed.steps == reference.steps
+    assert_same_result(reference.result_path, resumed.result_path)
+
+
 def test_a_conducting_run_resumes_to_the_same_temperatures_and_boundary_heat(tmp_path, monkeypatch):
     """The thermal state (temperature, heat flux, the heat that came in) is carried."""
     scene = column()
@@ -211,13 +222,7 @@ def test_a_conducting_run_resumes_to_the_same_temperatures_and_boundary_heat(tmp
                                                                        "upper": [0.6, 0.6]},
                                       "temperature": "300 + 100 * t"}]
     scene["output"]["fields"] += ["temperature", "heat_flux"]
-    reference = run(scene, tmp_path / "reference")
-    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
-    stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
-    assert stopped.status == "partial"
-    resumed = run(scene, tmp_path / "resumed", resume=True)
-    assert resumed.steps == reference.steps
-    assert_same_result(reference.result_path, resumed.result_path)
+    assert_resumes_alike(scene, tmp_path, monkeypatch)
 
 
 def test_a_saturated_run_resumes_to_the_same_pore_pressures(tmp_path, monkeypatch):
@@ -229,13 +234,7 @@ def test_a_saturated_run_resumes_to_the_same_pore_pressures(tmp_path, monkeypatc
     scene["boundary_conditions"].append({"type": "pore_pressure", "pressure": 0.0,
                                          "where": {"type": "box", "lower": [0.0, 0.29], "upper": [0.6, 0.31]}})
     scene["output"]["fields"] += ["pore_pressure", "effective_stress"]
-    reference = run(scene, tmp_path / "reference")
-    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
-    stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
-    assert stopped.status == "partial"
-    resumed = run(scene, tmp_path / "resumed", resume=True)
-    assert resumed.steps == reference.steps
-    assert_same_result(reference.result_path, resumed.result_path)
+    assert_resumes_alike(scene, tmp_path, monkeypatch)
 
 
 def test_a_run_with_a_tool_resumes_to_the_same_result(tmp_path, monkeypatch):
