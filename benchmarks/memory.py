@@ -4,10 +4,11 @@
     python benchmarks/memory.py --particles 12.4e6       # MPM3DMP's largest Taylor bar model
 
 Each size is examples/taylor_bar_3d.json with its cell size divided so the bar seeds about
-that many particles (2 per cell and axis, as the example); the run stops after `--steps`
-steps (time.max_steps) with its first frame written, every field of the example in it, and its
-preview drawn. A first run of the example compiles the kernels where they are not cached. Each run is
-a process of its own (solver.runner.run, as `mpm run` calls it): its peak resident set
+that many particles (2 per cell and axis, as the example); the run ends after about `--steps`
+steps (time.end: that many estimated time steps) with a frame at t = 0 and one at the end, every
+field of the example in them, and its preview drawn. A first run of the example compiles the
+kernels where they are not cached. Each run is a process of its own (solver.runner.run, as `mpm
+run` calls it): its peak resident set
 (VmHWM, /proc/<pid>/status) is read as it exits. The estimate is `mpm validate`'s
 (solver/summary.py memory_bytes: the process's own baseline included). Figures are on this
 machine's thread count (the per-thread copies of the grid count).
@@ -28,19 +29,20 @@ sys.path.insert(0, str(ROOT))
 
 from solver.examples import load_example  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
-from solver.summary import summarize  # noqa: E402
+from solver.summary import summarize, time_step  # noqa: E402
 
 BASE = "taylor_bar_3d"
 BASE_PARTICLES = 35_687   # the example's, at its cell size
 
 
 def scaled_scene(particles: float, steps: int) -> dict:
-    """The example with its cell size shrunk so it seeds about `particles` (particles ~ h^-3)."""
+    """The example with its cell size shrunk so it seeds about `particles` (particles ~ h^-3),
+    ending after about `steps` steps (the estimated dt) with a frame there: written once every
+    array has been stepped on (np.zeros's pages are resident only once written)."""
     scene = load_example(BASE)
     scene["grid"]["cell_size"] *= (BASE_PARTICLES / particles) ** (1 / 3)
-    scene["time"]["max_steps"] = steps
-    scene["output"]["frames"] = 2   # t = 0 is the only one reached in a few steps
-    scene["output"].pop("preview", None)
+    scene["time"]["end"] = steps * time_step(load_scene(scene))
+    scene["output"]["frames"] = 2   # t = 0 and the end
     return scene
 
 
