@@ -15,8 +15,8 @@ The model has no stiffness at p' = 0, so a body of it needs an initial stress (t
 Where the initial stress lies outside the ellipse of `preconsolidation_pressure`, p_c
 starts at the ellipse through it (normally consolidated there).
 
-The stress it updates is the effective stress: a pore fluid (issue 52) adds its pressure
-on top; until the solver has one, `pore_fluid` is refused by name.
+The stress it updates is the effective stress: with a `pore_fluid` (solver/pore_fluid.py)
+the pore pressure is a particle field of its own and the total stress sigma' - p I.
 """
 
 import math
@@ -48,15 +48,6 @@ class ModifiedCamClay(BaseMaterial):
     preconsolidation_pressure: Positive            # p_c at the start (Pa)
     initial_void_ratio: Positive                   # e0
     minimum_pressure: Positive | None = None       # p' floor of the stiffness; None: 1 % of p_c
-    pore_fluid: Any = None                         # two-phase soil (issue 52): refused until supported
-
-    @field_validator("pore_fluid")
-    @classmethod
-    def _no_pore_fluid(cls, value: Any) -> Any:
-        if value is not None:
-            raise scene_error("a pore fluid (two-phase saturated soil) is not supported yet; this material "
-                              "models the effective stress of a drained soil")
-        return value
 
     @model_serializer(mode="wrap")
     def _named_lambda(self, handler):

@@ -118,12 +118,20 @@ def consolidation(cells: int, tvs=(0.05, 0.197, 0.848), dim: int = 2, model: str
     return out
 
 
-def undrained(fluid: dict, end: float, cells: int = 10) -> tuple[float, float, float]:
+def undrained(fluid: dict, end: float, cells: int = 10, skeleton: dict | None = None,
+              oedometric_modulus: float = SKELETON["youngs_modulus"]) -> tuple[float, float, float]:
     """(the water's share of the total vertical stress p / (p - sigma'_zz), the mean p / q, both over
     the particles below the top cell, and the exact share (K_w/n) / (K_w/n + E_oed)) of the sealed
     column loaded at t = 0 and damped to rest. The top cell is left out: the load reaches the grid
-    through the top row of particles' stencils, so it carries 3/4 of q (a surface load's spread in MPM)."""
+    through the top row of particles' stencils, so it carries 3/4 of q (a surface load's spread in MPM).
+    `skeleton`: another soil material (with its E_oed) in place of the elastic Drucker-Prager one,
+    started from its geostatic stress under a gravity of 1e-6 m/s^2 (a geostatic stress needs
+    one; its weight is 1e-9 of the load)."""
     scene = column_scene(cells, end=end, drained=False, fluid=fluid, damping=0.5)
+    if skeleton is not None:
+        scene["materials"]["soil"] = {**skeleton, "pore_fluid": dict(fluid)}
+        scene["bodies"][0]["initial_stress"] = {"type": "geostatic"}
+        scene["gravity"] = [0.0] * (scene["dimension"] - 1) + [-1e-6]
     sim = run(scene, end)
     p = sim.particles.extra["pore_pressure"]
     dim = scene["dimension"]
@@ -131,7 +139,7 @@ def undrained(fluid: dict, end: float, cells: int = 10) -> tuple[float, float, f
     effective = sim.particles.stress[below, dim - 1, dim - 1]
     share = float(np.mean(p[below] / (p[below] - effective)))
     storage = fluid["bulk_modulus"] / fluid["porosity"]
-    return share, float(np.mean(p[below])) / LOAD, storage / (storage + SKELETON["youngs_modulus"])
+    return share, float(np.mean(p[below])) / LOAD, storage / (storage + oedometric_modulus)
 
 
 WATER = {"bulk_modulus": 2.2e9, "density": 1000.0, "hydraulic_conductivity": 1.0e-8, "porosity": 0.5}

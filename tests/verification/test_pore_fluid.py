@@ -61,6 +61,19 @@ class TestUndrained:
         assert share == pytest.approx(exact, abs=1e-4)
         assert mean == pytest.approx(exact, abs=1e-3)
 
+    def test_a_saturated_cam_clay_passes_the_load_to_the_water(self):
+        """Modified Cam-Clay with a pore fluid: the clay, stress-free at the start, has the
+        stiffness of its minimum_pressure (1 % of p_c: K = (1 + e0) p_min / kappa) and the
+        water, 10^4 times stiffer, takes all but 3e-5 of the load; a 1e-4 tolerance as for
+        the elastic skeleton fails a skeleton carrying more than 1e-4 of it."""
+        from test_cam_clay import CLAY, E0, KAPPA, NU, PC0
+        bulk = (1 + E0) * 0.01 * PC0 / KAPPA
+        shear = 3 * bulk * (1 - 2 * NU) / (2 * (1 + NU))
+        share, mean, exact = pc.undrained(pc.WATER, end=0.02, skeleton=CLAY,
+                                          oedometric_modulus=bulk + 4 * shear / 3)
+        assert share == pytest.approx(exact, abs=1e-4)
+        assert mean == pytest.approx(exact, abs=1e-3)
+
     def test_a_compressible_fluid_shares_the_load_with_the_skeleton(self):
         share, mean, exact = pc.undrained({**pc.FLUID, "hydraulic_conductivity": 1.0e-8}, end=0.5)
         assert share == pytest.approx(exact, abs=5e-3)
