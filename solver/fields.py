@@ -49,7 +49,7 @@ def through_grid(sim, values: np.ndarray) -> np.ndarray:
 
     The weights are those of the particles' current positions."""
     p, g = sim.particles, sim.grid
-    s = make_stencil(p.count, p.dimension, sim.shape.SUPPORT)
+    s = make_stencil(p.count, p.dimension, sim.wide_support)
     shape.evaluate(sim.shape, sim.wide_spec, p.x, p, g, s)
     mw = p.mass[:, None] * s.w
     node_mass = np.bincount(s.idx.ravel(), mw.ravel(), minlength=g.n_nodes)

@@ -43,6 +43,14 @@ def stencil_spec(dim: int, nodes_per_particle: int) -> tuple:
     return ((0,) * dim, (0,) * nodes_per_particle)
 
 
+def widest_stencil(dim: int) -> int:
+    """The most nodes per axis a stencil may have: numba unpacks the tuples a parallel
+    region reads, spec's node tuple among them, up to NUMBA_PARFOR_MAX_TUPLE_SIZE (100)
+    elements and refuses longer ones (10 per axis in 2D, 4 in 3D)."""
+    import numba
+    return int(numba.config.PARFOR_MAX_TUPLE_SIZE ** (1.0 / dim) + 1e-9)
+
+
 _FLAGS = (np.empty((0,)), np.empty((0, 0)))
 
 

@@ -115,7 +115,7 @@ def spread_forces(sim, rows: np.ndarray, force: np.ndarray) -> None:
         return
     p, grid = sim.particles, sim.grid
     x = np.ascontiguousarray(sim.formulation.positions(p)[rows])
-    stencil = make_stencil(rows.size, p.dimension, sim.shape.SUPPORT)
+    stencil = make_stencil(rows.size, p.dimension, sim.wide_support)
     subset = SimpleNamespace(extra={k: np.ascontiguousarray(a[rows]) for k, a in p.extra.items()},
                              F=np.ascontiguousarray(p.F[rows]))
     sim.domain.weights(sim.shape, sim.wide_spec, x, subset, grid, stencil)   # (outside: the step reports it)

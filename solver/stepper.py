@@ -65,7 +65,10 @@ class ExplicitMPM:
         # CPDI starts on a compact stencil and widens it when a domain needs it (solver/step/general.py)
         self.stencil_support = self.shape.COMPACT_SUPPORT or self.shape.SUPPORT
         self.spec = kernels.stencil_spec(scene.dimension, self.stencil_support**scene.dimension)
-        self.wide_spec = kernels.stencil_spec(scene.dimension, self.shape.SUPPORT**scene.dimension)
+        # the stencil of weights evaluated outside the step (fields, loads): SUPPORT, or the
+        # step's once a CPDI domain needed more
+        self.wide_support = self.shape.SUPPORT
+        self.wide_spec = kernels.stencil_spec(scene.dimension, self.wide_support**scene.dimension)
         shape.prepare(self.shape, scene, self.particles)
         self.loads = BodyLoads(scene)
         self.applied_loads = AppliedLoads(scene, self.particles) if scene.loads else None   # as seeded

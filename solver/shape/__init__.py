@@ -18,8 +18,9 @@ count gives the same bits). It returns the index of the first particle outside
 the grid (or whose stencil would need a node beyond the grid), or -1. `spec` makes the dimension and stencil size
 compile-time constants (kernels.stencil_spec). Stencil node k has the per-axis
 offsets (k // S**a) % S from the particle's first node, axis 0 fastest, S the
-stencil's nodes per axis: SUPPORT, or COMPACT_SUPPORT (CPDI) while the run is on its
-compact stencil (the kernel tells them apart by the length of spec's node tuple). Node numbers must be sum_a i_a * strides[a] with i_a the node's index
+stencil's nodes per axis: SUPPORT, or for CPDI COMPACT_SUPPORT while the run is on its
+compact stencil and as many as `support_needed` said once a domain outgrew SUPPORT
+(the kernel tells them apart by the length of spec's node tuple). Node numbers must be sum_a i_a * strides[a] with i_a the node's index
 along axis a of the whole grid (lower, cells), and a particle in cell i may touch
 nodes i - (S-1)//2 ... i + ceil(S/2) only (S = SUPPORT): with several processes
 the kernel is called with the strides of a process's slab of the grid
@@ -32,7 +33,10 @@ A function that needs per-particle data (GIMP's particle sizes) also provides
 Callers use the module-level `prepare` and `evaluate` below, which fall back to
 the plain kernel. A function that may refuse a particle inside the grid (CPDI: a
 domain larger than its stencil) provides `failure(x, particles, grid, index)`,
-the diagnostic the step reports instead of "outside the grid".
+the diagnostic the step reports instead of "outside the grid", and one whose
+domains may outgrow any fixed stencil (CPDI) provides `support_needed(x, particles,
+grid)`, the nodes per axis its largest domain needs, which the step widens the
+stencil to (solver/step/general.py).
 """
 from __future__ import annotations
 
@@ -43,7 +47,7 @@ import numpy as np
 
 from solver.shape.registry import ShapeFunction
 
-__all__ = ["BUILTIN", "REGISTRY", "ShapeFunction", "evaluate", "failure", "get", "prepare"]
+__all__ = ["BUILTIN", "REGISTRY", "ShapeFunction", "evaluate", "failure", "get", "prepare", "support_needed"]
 
 # The declaration modules, in the order the scene lists the names (its error
 # messages and JSON schema enumerate them in this order).
@@ -66,6 +70,7 @@ def get(name: str) -> SimpleNamespace:
     module = import_module(declared.kernels)
     functions = {"weights": module.weights, "prepare": getattr(module, "prepare", None),
                  "evaluate": getattr(module, declared.evaluate, None), "failure": getattr(module, "failure", None),
+                 "support_needed": getattr(module, "support_needed", None),
                  "hook": getattr(module, declared.hook, None) if declared.hook else None}
     return SimpleNamespace(__name__=f"{module.__name__}:{name}", SUPPORT=declared.support,
                            COMPACT_SUPPORT=declared.compact_support,
@@ -85,6 +90,14 @@ def failure(module, x: np.ndarray, particles, grid, index: int) -> tuple[str, st
     lower, inv_h and cells."""
     if hasattr(module, "failure"):
         return module.failure(x, particles, grid, index)
+    return None
+
+
+def support_needed(module, x: np.ndarray, particles, grid) -> int | None:
+    """The stencil's nodes per axis that the particles' domains need (CPDI); None for a
+    function whose stencil is fixed. `grid`: the whole grid's lower, inv_h and cells."""
+    if hasattr(module, "support_needed"):
+        return module.support_needed(x, particles, grid)
     return None
 
 

@@ -7,8 +7,10 @@ from solver.shape.registry import ShapeFunction
 R4 = ShapeFunction(
         # CPDI-R4 (1D: CPDI-L2): the particle's domain, a box of side h / particles_per_cell,
         # follows F as a parallelogram (parallelepiped); the weights are the hat functions
-        # at its corners. Four nodes per axis: the corners may reach one cell either side
-        # of the particle's own (a domain up to 2h wide per axis).
+        # at its corners. `support` 4: the corners within one cell either side of the
+        # particle's own, the widest stencil with several processes (the slabs' halo); on
+        # one process the stencil widens past it to what the largest domain needs
+        # (solver/shape/kernels/cpdi.py: support_needed).
         name="cpdi_r4", support=4, kernels="solver.shape.kernels.cpdi", least_cells=3,
         # a domain within two cells per axis (most: h / particles_per_cell stretched less
         # than 2x) touches 3 nodes per axis: the compact stencil, 27 nodes in 3D against 64

@@ -34,5 +34,5 @@ class ShapeFunction:
     hook: str = ""  # the kernel module's factory of a step hook it needs (cpdi_q4: its corners move), or none
     # Nodes per axis of the stencil a run starts with where fewer than `support` do for most
     # particles (CPDI: 3, a domain within two cells per axis); the first particle that needs
-    # `support` widens the stencil for the rest of the run (solver/step/general.py). 0: none.
+    # more widens the stencil for the rest of the run (solver/step/general.py). 0: none.
     compact_support: int = 0

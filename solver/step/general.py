@@ -35,8 +35,7 @@ class GeneralPhases(Phases):
         p = sim.particles
         x = sim.formulation.positions(p)
         outside = sim.domain.weights(sim.shape, sim.spec, x, p, sim.grid, sim.stencil)   # this process's node numbers
-        if outside >= 0 and sim.stencil_support < sim.shape.SUPPORT:   # a domain (CPDI) outgrew the compact stencil
-            self._widen_stencil()
+        while outside >= 0 and self._widen_for(x):   # a domain (CPDI) outgrew the stencil
             outside = sim.domain.weights(sim.shape, sim.spec, x, p, sim.grid, sim.stencil)
         if outside >= 0:
             told = shape.failure(sim.shape, x, p, sim.frame, outside)   # (whole-grid frame)
@@ -50,14 +49,34 @@ class GeneralPhases(Phases):
         for hook in sim.hooks.after_weights:
             hook(sim)
 
-    def _widen_stencil(self) -> None:
-        """The full stencil (SUPPORT nodes per axis) for the rest of the run. The compact one
-        held the same nonzero entries in the same order, so the results do not depend on when
-        this happens (bit for bit: the entries it leaves out only ever add zeros)."""
+    def _widen_for(self, x: np.ndarray) -> bool:
+        """After the weights refused a particle: widen the stencil to the nodes per axis the
+        largest domain needs (at least one more than now: the 4-node stencil keeps the corners
+        within the particle's neighbouring cells, and round-off may put a corner a cell further
+        than the estimate), and say whether it did. Not where the refusal had another cause (a
+        folded domain, a particle outside the grid: the domains fit), nor beyond SUPPORT with
+        several processes (the slabs' halo holds SUPPORT nodes, solver/parallel), the whole
+        grid or what the kernels take (kernels.widest_stencil)."""
         sim = self.sim
-        sim.stencil_support = sim.shape.SUPPORT
-        sim.spec = sim.wide_spec
-        sim.stencil = make_stencil(sim.particles.count, sim.particles.dimension, sim.stencil_support)
+        needed = shape.support_needed(sim.shape, x, sim.particles, sim.frame)
+        widest = sim.shape.SUPPORT if sim.domain.processes > 1 else min(max(sim.frame.cells) + 1,
+                                                                        kernels.widest_stencil(sim.particles.dimension))
+        if needed is None or needed < sim.stencil_support or sim.stencil_support >= widest:
+            return False
+        self._widen_stencil(min(max(needed, sim.stencil_support + 1), widest))
+        return True
+
+    def _widen_stencil(self, support: int | None = None) -> None:
+        """A stencil of `support` nodes per axis (SUPPORT if not given) for the rest of the run.
+        The narrower one held the same nonzero entries in the same order, so the results do not
+        depend on when this happens (bit for bit: the entries it leaves out only ever add zeros)."""
+        sim = self.sim
+        p = sim.particles
+        sim.stencil_support = support or sim.shape.SUPPORT
+        sim.spec = kernels.stencil_spec(p.dimension, sim.stencil_support**p.dimension)
+        if sim.stencil_support > sim.shape.SUPPORT:   # what fields and loads evaluate on too
+            sim.wide_support, sim.wide_spec = sim.stencil_support, sim.spec
+        sim.stencil = make_stencil(p.count, p.dimension, sim.stencil_support)
 
     # -- P2G ------------------------------------------------------------------
 

@@ -360,22 +360,52 @@ def test_compact_stencil_gives_the_wide_stencils_results_bit_for_bit(shape_funct
         np.testing.assert_array_equal(a, b)
 
 
-def test_a_domain_outgrowing_the_compact_stencil_widens_it_for_the_rest_of_the_run():
-    """A domain stretched to 1.9 cells (its corners in three cells along x) mid-run: the step
-    widens the stencil to 4 nodes per axis and goes on with the same bits as a run that had
-    the wide stencil from the start."""
+@pytest.mark.parametrize("stretch,grid_lower,support", [(3.8, 0.0, 4), (7.6, -1.0, 6)])
+def test_a_domain_outgrowing_the_stencil_widens_it_as_far_as_it_needs_for_the_rest_of_the_run(
+        stretch, grid_lower, support):
+    """A domain (a box of h/2 about x = 0.3125) stretched mid-run: to 1.9 cells (its corners
+    in three cells along x) the step widens the stencil to 4 nodes per axis; to 3.8 cells
+    (corners at -0.1625 and 0.7875, in cells 3 and 7 of a grid from -1) to the 6 its corners
+    span, instead of stopping. Either way it goes on with the same bits as a run that had
+    that stencil from the start."""
     from solver.scene import load_scene
     from solver.stepper import ExplicitMPM
-    scene = load_scene(_scene())
-    compact, wide = ExplicitMPM(scene), ExplicitMPM(scene)
-    wide.phases._widen_stencil()
+    scene = load_scene({**_scene(), "grid": {"lower": [grid_lower, 0.0], "upper": [1.0 - 3 * grid_lower, 1.0],
+                                             "cell_size": 0.25}})
+    grown, wide = ExplicitMPM(scene), ExplicitMPM(scene)
+    wide.phases._widen_stencil(support)
+    assert grown.particles.x[0] == pytest.approx([0.3125, 0.3125])
     for step in range(20):
         if step == 5:
-            for sim in (compact, wide):
-                sim.particles.F[0] = np.diag([3.8, 1.0])
-        compact.advance(1e-3)
+            for sim in (grown, wide):
+                sim.particles.F[0] = np.diag([stretch, 1.0])
+        grown.advance(1e-3)
         wide.advance(1e-3)
-        assert compact.stencil_support == (3 if step < 5 else 4)
-    assert compact.stencil.w.shape[1] == 16
-    for a, b in zip(_state(compact), _state(wide)):
+        assert grown.stencil_support == (3 if step < 5 else support)
+    assert grown.stencil.w.shape[1] == support ** 2 and grown.wide_support == support
+    for a, b in zip(_state(grown), _state(wide)):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("dim", [1, 2])
+def test_domains_stretched_over_several_cells_keep_unity_and_linear_reproduction(dim):
+    """A stencil of S nodes per axis, S from `support_needed`, holds domains of any size
+    (up to the kernels' widest stencil: 2D here, 3D stops at 4 nodes per axis):
+    boxes of h/2 stretched up to 9x along an axis (4.5 cells) and sheared, well inside the
+    grid, give weights that sum to 1, gradients that sum to 0 and reproduce linear fields
+    (eq. 3.33 holds for any domain: the corners' hats do), as on the 4-node stencil."""
+    from solver.shape.kernels.cpdi import support_needed
+    rng = np.random.default_rng(31 + dim)
+    grid = make_grid(dim, cells=16, h=0.25)
+    x = _inside(grid, 100, rng, 6.0)
+    F = _random_F(len(x), dim, rng)
+    F[:, 0, 0] = rng.uniform(5.0, 9.0, size=len(x))
+    module = shape.get("cpdi_r4")
+    particles = SimpleNamespace(F=F, extra={"domain_length": np.repeat(grid.h[None] / 2, len(x), axis=0)})
+    support = support_needed(x, particles, grid)
+    assert support >= 6   # (4 cells and more: the domains outgrew the 4-node stencil)
+    narrow = make_stencil(len(x), dim, 4)
+    assert shape.evaluate(module, kernels.stencil_spec(dim, 4 ** dim), x, particles, grid, narrow) >= 0
+    stencil = make_stencil(len(x), dim, support)
+    assert shape.evaluate(module, kernels.stencil_spec(dim, support ** dim), x, particles, grid, stencil) == -1
+    _assert_unity_and_linear(stencil, grid, x, gradient_sum=1e-12)

@@ -17,15 +17,21 @@ mean of d/dxi_a of prod_b (1 + s_cb xi_b) / 2 equal to s_ca / 2^d). The weights
 sum to 1 and the gradients to 0 (eq. 3.33); a linear field's gradient is
 reproduced exactly.
 
-The stencil is the 4 nodes per axis from the node below the particle's cell
-(cells i-1, i, i+1 around the particle's cell i, nearer the grid ends shifted
-inwards): corners up to one cell either side. A corner beyond that (a domain
-stretched over more than the three cells, where CPDI develops the holes of
-review 3.7 / spec E28) stops the run naming the particle: `failure` tells it
-apart from a particle outside the grid. A corner beyond a grid end is moved onto
-it (review 3.7: "GIMP/CPDI need ghost cells"; here, as GIMP's boxes are cut), so
-the weights keep their partition of unity at walls, at the price of linear
-reproduction for that particle.
+The stencil holds S nodes per axis, as many as the largest domain needs: it starts
+at 3 (the compact stencil: domains within two cells per axis), and when the weights
+refuse a particle whose corners span more the step widens it for the rest of the
+run to `support_needed` (solver/step/general.py), as far as the corners reach up to
+the kernels' widest stencil (solver/kernels.py: 10 nodes per axis in 2D, 4 in 3D).
+Each corner adds to the 2^d nodes of its own cell only (the sums of eq. 3.32), so
+S is merely where those nodes are stored. S = 4 keeps the corners within the
+particle's cell and its neighbours (the slabs' halo with several processes, which
+stop the run there naming the particle: `failure`). A domain stretched over more
+than two cells develops the holes of review 3.7 / spec E28 (a node inside it that
+no corner's cell touches gets no weight); the stretched E7 vortex
+(tests/verification/test_cpdi_ulmpm.py) measures what that costs. A corner
+beyond a grid end is moved onto it (review 3.7: "GIMP/CPDI need ghost cells";
+here, as GIMP's boxes are cut), so the weights keep their partition of unity at
+walls, at the price of linear reproduction for that particle.
 """
 from __future__ import annotations
 
@@ -83,11 +89,11 @@ def failure(x, particles, grid, index):
                                  particles.F[index:index + 1])[0]
     extent = (corners.max(axis=0) - corners.min(axis=0)) * grid.inv_h
     return ("particle domain (cpdi)",
-            f"spans {np.array2string(extent, precision=3)} cells per axis and reaches beyond the cells next to "
-            "its own, which its stencil covers (larger domains leave holes in CPDI's weights, review 3.7): a "
-            "domain is h / particles_per_cell stretched by F, so seed more particles per cell, or use a shape "
-            "function without domains ('gimp', 'cubic_bspline'); a tracked (cpdi_q4, cpdi_tet4) domain may "
-            "also have folded")
+            f"spans {np.array2string(extent, precision=3)} cells per axis, more than the widest stencil holds: "
+            "with several processes the cells next to the particle's own (the slabs' halo), on one the kernels' "
+            "largest stencil (10 nodes per axis in 2D, 4 in 3D); seed more particles per cell (a domain is "
+            "h / particles_per_cell stretched by F), or run on one process; a tracked (cpdi_q4, cpdi_tet4) "
+            "domain may also have folded")
 
 
 def domain_corners(x, length, F) -> np.ndarray:
@@ -103,8 +109,8 @@ def domain_corners(x, length, F) -> np.ndarray:
 def weights(spec, x, length, F, lower, inv_h, cells, strides, idx, w, dw, blocks):
     """CPDI-R4: the domains carried by F (`length` the seeded box sides)."""
     dims, nodes = spec
-    if SUPPORT ** len(dims) != len(nodes) and COMPACT ** len(dims) != len(nodes):
-        raise ValueError("cpdi: the stencil is not 4 (or 3) nodes per axis")
+    if _nodes_per_axis(len(nodes), len(dims)) ** len(dims) != len(nodes) or len(nodes) < COMPACT ** len(dims):
+        raise ValueError("cpdi: the stencil is not S^d nodes, S >= 3")
     bounds = block_bounds(x.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
@@ -162,39 +168,33 @@ def _first_nodes(p, x, lower, inv_h, cells, base):
 @njit(cache=True)
 def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw, cell, frac):
     """phi_I = sum_c wf_c N_I(x_c) and grad phi_I = sum_c gw_c N_I(x_c), the corners `at` (in
-    cells) moved onto the grid. On the wide stencil (4 nodes per axis from `base`): False where
-    a corner lies outside its three cells per axis. On the compact one (3 per axis, `nodes`
-    3^d long): the nodes of the two cells per axis from the corners' lowest, False where the
-    corners span three cells on an axis (the step then widens the stencil: COMPACT).
+    cells) moved onto the grid, on a stencil of S nodes per axis (`nodes` S^d long). S = SUPPORT
+    (4): from `base`, the node below the particle's cell; False where a corner lies outside the
+    particle's cell and its two neighbours per axis (the slabs' halo, solver/parallel). Any other
+    S (3, the compact stencil; 5 and more, stretched domains): the nodes of the S - 1 cells per
+    axis from the corners' lowest; False where the corners span more (the step then widens the
+    stencil to what the largest domain needs: `support_needed`). Either way the nonzero entries
+    come in the same order (node by node, axis 0 fastest), so every S gives the same sums.
     cell (2^d, d) int64, frac (2^d, d): scratch, allocated once per block by the caller."""
     corners, dim = at.shape
-    nk = len(nodes)
-    span = COMPACT if nk == COMPACT ** dim else SUPPORT   # (a compile-time constant)
+    span = _nodes_per_axis(len(nodes), dim)   # (folds to a constant: len(nodes) is one)
     for c in range(corners):
         for a in range(dim):   # the corner's cell and its position in it
             s = min(max(at[c, a], 0.0), float(cells[a]))
             i = min(int(s), cells[a] - 1)
             cell[c, a] = i
             frac[c, a] = s - i
-    if span == COMPACT:
+    if span != SUPPORT:
         for a in range(dim):
             low = cell[0, a]
             for c in range(1, corners):
                 low = min(low, cell[c, a])
-            base[a] = min(low, cells[a] - 2)
+            base[a] = max(min(low, cells[a] - span + 1), 0)   # (0: a grid of fewer cells than the stencil)
     for c in range(corners):
         for a in range(dim):
             if cell[c, a] < base[a] or cell[c, a] > base[a] + span - 2:
                 return False
-    for k in range(nk):
-        w[p, k] = 0.0
-        node = 0
-        rest = k
-        for a in range(dim):
-            dw[p, k, a] = 0.0
-            node += (base[a] + rest % span) * strides[a]
-            rest //= span
-        idx[p, k] = node
+    _clear(p, span, base, cells, strides, idx, w, dw)
     for c in range(corners):
         for j in range(2 ** dim):   # the 2^d nodes of the corner's cell
             k = 0
@@ -209,6 +209,51 @@ def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw, cell, frac)
             for a in range(dim):
                 dw[p, k, a] += N * gw[c, a]
     return True
+
+
+@njit(cache=True)
+def _nodes_per_axis(nodes, dim):
+    """S with S^dim = nodes."""
+    span = 1
+    while span ** dim < nodes:
+        span += 1
+    return span
+
+
+@njit(cache=True)
+def _clear(p, span, base, cells, strides, idx, w, dw):
+    """Particle p's stencil: node k = sum_a (base_a + k_a) strides_a (k_a the digits of k in base
+    `span`, axis 0 fastest), zero weights. A node beyond a grid end (a grid of fewer cells per
+    axis than the stencil) is numbered as the last one: its entry keeps weight 0."""
+    dim = base.shape[0]
+    k = 0
+    for k2 in range(span if dim > 2 else 1):
+        for k1 in range(span if dim > 1 else 1):
+            for k0 in range(span):
+                node = min(base[0] + k0, cells[0]) * strides[0]
+                if dim > 1:
+                    node += min(base[1] + k1, cells[1]) * strides[1]
+                if dim > 2:
+                    node += min(base[2] + k2, cells[2]) * strides[2]
+                idx[p, k] = node
+                w[p, k] = 0.0
+                for a in range(dim):
+                    dw[p, k, a] = 0.0
+                k += 1
+
+
+def support_needed(x, particles, grid) -> int:
+    """The nodes per axis a stencil needs to hold every particle's domain (the largest number
+    of cells per axis its corners span, plus one): what the step widens to when the weights
+    refuse a particle (solver/step/general.py)."""
+    if CORNERS in particles.extra:
+        corners = particles.extra[CORNERS]
+    else:
+        corners = domain_corners(x, particles.extra[LENGTH], particles.F)
+    cells = np.asarray(grid.cells)
+    s = np.clip((corners - grid.lower) * grid.inv_h, 0.0, cells)
+    cell = np.minimum(np.floor(np.nan_to_num(s)), cells - 1)
+    return int((cell.max(axis=1) - cell.min(axis=1)).max(initial=0)) + 2
 
 
 # --------------------------------------------------------------------------- CPDI-Q4
@@ -229,8 +274,9 @@ def weights_tracked(spec, x, corners, lower, inv_h, cells, strides, idx, w, dw, 
     hexahedron of eight, as six tetrahedra (below)."""
     dims, nodes = spec
     dim = len(dims)
-    if (SUPPORT ** dim != len(nodes) and COMPACT ** dim != len(nodes)) or corners.shape[1] != 2 ** dim or dim == 1:
-        raise ValueError("cpdi_q4 / cpdi_tet4: 2D / 3D, 4 (or 3) nodes per axis, 2^d corners")
+    if (_nodes_per_axis(len(nodes), dim) ** dim != len(nodes) or len(nodes) < COMPACT ** dim
+            or corners.shape[1] != 2 ** dim or dim == 1):
+        raise ValueError("cpdi_q4 / cpdi_tet4: 2D / 3D, S^d nodes (S >= 3), 2^d corners")
     bounds = block_bounds(x.shape[0], blocks)
     bad = np.empty(blocks, dtype=np.int64)
     for t in prange(blocks):
