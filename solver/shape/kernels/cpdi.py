@@ -177,7 +177,7 @@ def _scatter(p, nodes, base, at, wf, gw, cells, strides, idx, w, dw, cell, frac)
     come in the same order (node by node, axis 0 fastest), so every S gives the same sums.
     cell (2^d, d) int64, frac (2^d, d): scratch, allocated once per block by the caller."""
     corners, dim = at.shape
-    span = _nodes_per_axis(len(nodes), dim)   # (folds to a constant: len(nodes) is one)
+    span = _nodes_per_axis(len(nodes), dim)   # (len(nodes) is a compile-time constant)
     for c in range(corners):
         for a in range(dim):   # the corner's cell and its position in it
             s = min(max(at[c, a], 0.0), float(cells[a]))
