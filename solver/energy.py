@@ -3,7 +3,7 @@
 Each term is an energy the bodies hold now (STORED: kinetic, strain, the tools' penalty),
 an energy they dissipated since t = 0 (DISSIPATED: the work of plastic flow) or a work
 done on them since t = 0 (WORK: the loads and gravity, the boundary conditions and
-rigid bodies, damping, friction, tools). Energy is conserved when
+rigid bodies, damping, friction, tools, a pore fluid's pressure). Energy is conserved when
 
     balance = sum(stored) + sum(dissipated) - sum(work) = the stored energy at t = 0
 
@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from solver.materials import plastic_work
+from solver.pore_fluid_schema import saturated
 
 STORED, DISSIPATED, WORK = "stored", "dissipated", "work"
 
@@ -53,6 +54,10 @@ TERMS: list[Term] = [
     Term("friction_work", WORK, lambda sim: sim.friction_work, lambda scene: frictional(scene)),   # solver/contact.py
     Term("tool_work", WORK, lambda sim: sim.tool_work, lambda scene: bool(scene.tools)),   # solver/tools.py
     Term("tool_penalty_energy", STORED, lambda sim: sim.tools.stored_energy(sim), lambda scene: bool(scene.tools)),
+    # a saturated soil's pore pressure on the mixture, sum dt sum_p V_p p_p tr(L_p) (solver/pore_fluid.py):
+    # negative while the skeleton compresses, the share of the loads' work the pore water takes
+    # (stored in it while undrained, dissipated by Darcy flow as it drains)
+    Term("pore_pressure_work", WORK, lambda sim: sim.pore_fluid.work, saturated),
 ]
 
 

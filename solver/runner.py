@@ -236,7 +236,7 @@ class _TimeLoop:
         if finished or sim.step_count % self.series_every == 0:
             writer.append_series(time=sim.time, dt=self.dt, **energy.series_row(e, self.initial_energy),
                                  **sim.reactions(), **series.row(sim), **sim.thermal_series())
-        supplied = self.initial_energy + e.supplied_work + sim.expansion_energy_bound() + sim.pore_work()
+        supplied = self.initial_energy + e.supplied_work + sim.expansion_energy_bound()
         if not e.total <= ENERGY_GROWTH_LIMIT * supplied + self.energy_floor:
             raise Instability(sim.step_count, sim.time, None, "total energy",
                               f"{e.total:.6g} exceeds {ENERGY_GROWTH_LIMIT:g} x the energy supplied "

@@ -210,7 +210,7 @@ class ExplicitMPM:
 
     def pore_work(self) -> float:
         """The work the pore pressure of a saturated soil has done on the mixture so far (solver/pore_fluid.py),
-        summed over the processes: the growth check counts it as supplied; 0 in a dry scene."""
+        summed over the processes (a checkpoint keeps it); 0 in a dry scene."""
         if self.pore_fluid is None:
             return 0.0
         return float(self.domain.sum([self.pore_fluid.work])[0])
