@@ -16,7 +16,7 @@ variant: the fastest and the median step; per ratio: the ratio of the fastest st
 brackets, the median of the per-round ratios.
 
 Cases: tests/verification/pore_fluid_cases.py (Terzaghi on 10, 20, 40 cells, in 3D, each soil
-model; the undrained response of water and of a softer fluid).
+model; the undrained response of water and of a softer fluid; the fast wave's speed).
 """
 from __future__ import annotations
 
@@ -121,6 +121,13 @@ def case_table() -> None:
                               ("soft fluid, K_w / n = 3 E_oed", {**pc.FLUID, "hydraulic_conductivity": 1e-8}, 0.5)):
         (share, mean, exact), wall = timed(pc.undrained, fluid, end)
         print(f"| undrained, {label} | {share:.6f} | {exact:.6f} | {mean:.6f} | {wall:.1f} |", flush=True)
+    print()
+    print("| cells | front speed (m/s) | exact c (m/s) | error | front spreading (the tolerance) | wall (s) |")
+    print("|---|---|---|---|---|---|")
+    for cells in (10, 20, 40, 80):
+        (speed, exact, spreading), wall = timed(pc.fast_wave, cells)
+        print(f"| {cells} | {speed:.2f} | {exact:.2f} | {(speed - exact) / exact:+.4f} | {spreading:.4f} | {wall:.2f} |",
+              flush=True)
 
 
 def main() -> None:

@@ -147,3 +147,51 @@ WATER = {"bulk_modulus": 2.2e9, "density": 1000.0, "hydraulic_conductivity": 1.0
 
 def isochrone_order(coarse: float, fine: float) -> float:
     return math.log2(coarse / fine)
+
+
+def fast_wave_speed(fluid: dict = FLUID, skeleton: dict = SKELETON) -> float:
+    """c = sqrt((K' + 4G/3 + K_w/n) / rho), rho the mixture density (the material's `density`):
+    the undrained compression wave, the water moving with the skeleton."""
+    e, nu = skeleton["youngs_modulus"], skeleton["poisson_ratio"]
+    constrained = e * (1 - nu) / ((1 + nu) * (1 - 2 * nu))   # K' + 4G/3
+    return math.sqrt((constrained + fluid["bulk_modulus"] / fluid["porosity"]) / skeleton["density"])
+
+
+def _crossing_time(history: list[tuple[float, float]], level: float) -> float:
+    """The time the pressure first reaches `level`, linear between the recorded steps."""
+    for (t0, p0), (t1, p1) in zip(history, history[1:]):
+        if p0 < level <= p1:
+            return t0 + (t1 - t0) * (level - p0) / (p1 - p0)
+    raise AssertionError(f"the pressure never reached {level:.4g}")
+
+
+def fast_wave(cells: int, depths=(0.3, 0.7)) -> tuple[float, float, float]:
+    """The sealed, undrained (k = 1e-8 m/s) column under a step load at its top: the times at
+    which the pore pressure at two depths reaches half its undrained value behind the front,
+    q (K_w/n) / (K_w/n + E_oed). Returns (measured speed (d2 - d1) / (t2 - t1), exact c, the
+    front's spreading): the difference of two arrivals leaves out where the load enters (spread
+    over the top particles' stencils). The spreading is how much longer the front takes to rise
+    from 1/4 to 3/4 of its height at the deeper probe than at the other, over the transit time
+    between them: the grid's dispersion widens the front as it travels, and its midpoint can
+    drift from the characteristic by no more than that. The pressure at a depth is that of the
+    particle nearest to it."""
+    fluid = {**FLUID, "hydraulic_conductivity": 1.0e-8}
+    c = fast_wave_speed(fluid)
+    end = (max(depths) + 0.25 * HEIGHT) / c   # the front's tail past the deeper probe, before the base's echo
+    scene = column_scene(cells, end=end, drained=False, fluid=fluid)
+    sim = ExplicitMPM(load_scene(scene))
+    dim = scene["dimension"]
+    depth = HEIGHT - sim.particles.x[:, dim - 1]
+    probes = [int(np.argmin(np.abs(depth - d))) for d in depths]
+    probed = [float(depth[i]) for i in probes]
+    storage = fluid["bulk_modulus"] / fluid["porosity"]
+    half = 0.5 * LOAD * storage / (storage + SKELETON["youngs_modulus"])
+    history = [(0.0, [0.0] * len(probes))]
+    while sim.time < end * (1 - 1e-12):
+        sim.advance(min(sim.stable_time_step(scene["time"]["cfl"]), end - sim.time))
+        history.append((sim.time, [float(sim.particles.extra["pore_pressure"][i]) for i in probes]))
+    def arrivals(level):
+        return [_crossing_time([(t, p[j]) for t, p in history], level) for j in range(len(probes))]
+    middle, early, late = arrivals(half), arrivals(0.5 * half), arrivals(1.5 * half)
+    spreading = (late[1] - early[1]) - (late[0] - early[0])
+    return (probed[1] - probed[0]) / (middle[1] - middle[0]), c, spreading * c / (probed[1] - probed[0])
