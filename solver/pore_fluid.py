@@ -87,7 +87,8 @@ class PoreFluid:
 
     def place(self, sim) -> "PoreFluid":
         n = sim.grid.mass.shape[0]
-        self.storage = np.zeros((n, 3))
+        self.storage = np.zeros((n, 2))
+        self.inflow = np.zeros(n)
         self.grid_pressure = np.zeros(n)
         self.change = np.zeros(n)
         self.squeeze = np.zeros(n)
@@ -100,20 +101,26 @@ class PoreFluid:
             self.held.set_time(t_end)
 
     def after_forces(self, sim) -> None:
-        """The pore pressure's force on the grid, and the step's flow into the particles' p."""
+        """The pore pressure's force on the grid, and the step's flow into the particles' p.
+        With slabs, each scatter's ghost nodes are summed into their owners, which compute
+        the nodal pressure (shared back for Darcy's gradient) and the change (shared at end_step)."""
         p, s, x = sim.particles, sim.stencil, sim.particles.extra
         pressure = x["pore_pressure"]
         self.storage.fill(0.0)
         pore_kernels.pressure_to_grid(s.idx, s.w, s.dw, p.volume, x["pore_compliance"], pressure, self.storage,
-                                      sim.grid.force)
+                                      sim.grid.force)   # (the force's ghosts: the mechanics sums them next)
+        sim.domain.sum_ghosts(self.storage)
         stored = self.storage[:, 0] > self.cutoff
         np.divide(self.storage[:, 1], self.storage[:, 0], out=self.grid_pressure, where=stored)
         self.grid_pressure[~stored] = 0.0
         projected = self.grid_pressure[self.held.node]
         self.grid_pressure[self.held.node] = self.held.value
+        sim.domain.share_nodes(self.grid_pressure)
+        self.inflow.fill(0.0)
         pore_kernels.darcy_to_grid(s.idx, s.dw, self.grid_pressure, x["pore_mobility"], x["pore_fluid_density"],
-                                   self.gravity, p.volume, x["darcy_flux"], self.storage)
-        np.divide(self.dt * self.storage[:, 2], self.storage[:, 0], out=self.change, where=stored)
+                                   self.gravity, p.volume, x["darcy_flux"], self.inflow)
+        sim.domain.sum_ghosts(self.inflow)
+        np.divide(self.dt * self.inflow, self.storage[:, 0], out=self.change, where=stored)
         self.change[~stored] = 0.0
         self.change[self.held.node] = np.where(stored[self.held.node], self.held.value - projected, 0.0)
         self.stored = stored
@@ -129,10 +136,12 @@ class PoreFluid:
         """S_I dp_I = -dt squeeze_I (0 on the drained nodes) joins the flow's change, and the
         particles take it (here, not at after_stress: USF updates the stress before its P2G)."""
         squeeze = self.squeeze
+        sim.domain.sum_ghosts(squeeze)
         squeeze[self.held.node] = 0.0
         np.divide(squeeze, self.storage[:, 0], out=squeeze, where=self.stored)
         squeeze[~self.stored] = 0.0
         self.change -= dt * squeeze
+        sim.domain.share_nodes(self.change)   # (the owners' values: a ghost's sums were partial)
         s, x = sim.stencil, sim.particles.extra
         pore_kernels.take_change(s.idx, s.w, self.change, x["pore_compliance"], x["pore_pressure"])
 

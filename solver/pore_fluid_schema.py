@@ -95,7 +95,7 @@ def pore_fluid_problems(scene, condition_class, length_ok) -> list[tuple[str, st
 
 
 def _unsupported(scene) -> list[tuple[str, str]]:
-    """What the two-phase step (ULMPM with USL or MUSL, one process, one grid field) does not run yet."""
+    """What the two-phase step (ULMPM with USL or MUSL, one grid field) does not run yet."""
     first = next(name for name, m in scene.materials.items() if m.pore_fluid is not None)
     path = f"materials.{first}.pore_fluid"
     problems = []
@@ -107,9 +107,6 @@ def _unsupported(scene) -> list[tuple[str, str]]:
         problems.append((path, "is not supported yet in an axisymmetric scene"))
     if scene.dimension == 1:
         problems.append((path, "is not supported yet in 1D (2D plane strain and 3D)"))
-    if scene.parallel.processes > 1:
-        problems.append((path, f"is not supported yet with several processes (parallel.processes = "
-                               f"{scene.parallel.processes})"))
     if scene.contact.fields:
         problems.append((path, f"is not supported yet with contact model {scene.contact.model!r} "
                                "(one grid field only)"))

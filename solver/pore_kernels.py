@@ -2,9 +2,10 @@
 (idx, w, dw at x_p^t). Serial: two scatters a step over the saturated particles, cheap
 beside the mechanics' passes, and free of races without per-thread copies.
 
-The nodal array `storage` is (n_nodes, 3): the storage S_I = sum_p phi_I V_p n_p / K_w,
-the storage-weighted pressure sum_p phi_I V_p (n_p / K_w) p_p, and the flux rate
-Q_I = sum_p V_p q_p . grad phi_I (the weak form of -div q; impervious faces are natural).
+The nodal array `storage` is (n_nodes, 2): the storage S_I = sum_p phi_I V_p n_p / K_w and
+the storage-weighted pressure sum_p phi_I V_p (n_p / K_w) p_p; `inflow` is the flux rate
+Q_I = sum_p V_p q_p . grad phi_I (the weak form of -div q; impervious faces are natural). Each
+is summed over the slabs' ghost nodes after its scatter (solver/pore_fluid.py).
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ def pressure_to_grid(idx, w, dw, volume, compliance, pressure, storage, force):
 
 
 @njit(cache=True)
-def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volume, flux, storage):
+def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volume, flux, inflow):
     """q_p = -(k / (rho_w g_n)) (grad p - rho_w g) with grad p = sum_I p_I grad phi_I(x_p)
     (Darcy), and Q_I += V_p q_p . grad phi_I."""
     dim = dw.shape[2]
@@ -46,7 +47,7 @@ def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volu
             q = 0.0
             for a in range(dim):
                 q += flux[p, a] * dw[p, k, a]
-            storage[idx[p, k], 2] += volume[p] * q
+            inflow[idx[p, k]] += volume[p] * q
 
 
 @njit(cache=True)

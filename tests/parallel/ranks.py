@@ -116,6 +116,32 @@ AXISYMMETRIC = {
     "parallel": {"processes": 1, "rebalance_every": 20},
 }
 
+# A saturated column (solver/pore_fluid.py) under a load at its top, drained there and through
+# a box of nodes on its left side at mid-height: the slabs split its height (20 cells; the cut
+# of K = 2 at y = 0.5, inside the box), so the storage, the nodal pressure, Darcy's inflow and
+# the skeleton's volume change cross the halo, as do held nodes. K_w / n = 3 E and k as in
+# tests/verification/pore_fluid_cases.py's Terzaghi column; dt under the diffusion limit (8e-4).
+PORE_2D = {
+    "name": "equivalence-pore", "dimension": 2, "method": {"scheme": "musl"},
+    "grid": {"lower": [0.0, 0.0], "upper": [0.2, 1.0], "cell_size": 0.05},
+    "materials": {"soil": {"model": "drucker_prager", "density": 2000.0, "youngs_modulus": 1.0e6,
+                           "poisson_ratio": 0.3, "friction_angle": 30.0, "cohesion": 1.0e5,
+                           "pore_fluid": {"bulk_modulus": 1.5e6, "density": 1000.0, "hydraulic_conductivity": 0.0025,
+                                          "porosity": 0.5}}},
+    "bodies": [{"name": "soil", "material": "soil", "particles_per_cell": 2,
+                "geometry": {"type": "box", "lower": [0.0, 0.0], "upper": [0.2, 1.0]},
+                "initial_pore_pressure": {"type": "uniform", "pressure": 1.0e4}}],
+    "boundary_conditions": [{"type": "wall", "face": face, "mode": "slip"} for face in ("x-", "x+", "y-")] + [
+        {"type": "pore_pressure", "face": "y+", "pressure": 0.0},
+        {"type": "pore_pressure", "where": {"type": "box", "lower": [0.0, 0.44], "upper": [0.01, 0.56]},
+         "pressure": "2e3 * t"}],
+    "loads": [{"type": "traction", "body": "soil", "where": {"type": "box", "lower": [0.0, 0.975], "upper": [0.2, 1.0]},
+               "traction": [0.0, -1.0e4]}],
+    "time": {"end": 200 * 4e-4, "dt": 4e-4},
+    "output": {"frames": 2, "fields": ["position", "velocity", "stress", "pore_pressure"], "energies": 10},
+    "parallel": {"processes": 1, "rebalance_every": 20},
+}
+
 # Total Lagrangian (slabs of the reference configuration, particles never migrate):
 # a block contracting along x under gravity, quadratic B-splines with APIC, and a
 # rigid pusher that moves two cells to the left through the reference grid.

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ranks import (AXISYMMETRIC, HEAT_2D, RIGID_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference,
+from ranks import (AXISYMMETRIC, HEAT_2D, PORE_2D, RIGID_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference,
                    run_cli, run_mpiexec, scene)
 
 from solver.results import read_series
@@ -64,6 +64,8 @@ CASES = {
                              "where": {"type": "box", "lower": [0.45, 0.1], "upper": [0.55, 0.14]}},
                             {"type": "heat_flux", "face": "y-", "flux": "1e5 * t"}]),
     "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
+    # a saturated column (solver/pore_fluid.py): its nodal pressure, flows and drained nodes across the slabs
+    "pore": scene(PORE_2D),
     # tools (solver/tools.py): each process pushes its particles, the reactions are summed
     "tools": scene(SCENE_2D, tools=[{"name": "roller", "geometry": {"type": "sphere", "center": [0.5, 0.5],
                                                                     "radius": 0.16},
@@ -75,7 +77,8 @@ RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl"
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("axisymmetric-tlmpm", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2), ("contact-density", 2), ("contact-density", 3),
-        ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2), ("tools", 2), ("tools-tlmpm", 2)]
+        ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2), ("tools", 2), ("tools-tlmpm", 2),
+        ("pore", 2), ("pore", 3)]
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -114,8 +117,8 @@ def test_k_processes_give_the_single_process_particles(name, processes, single, 
     got, want = frame["fields"], reference["fields"]
     assert np.array_equal(got["id"], want["id"]) and np.array_equal(got["body"], want["body"])
     assert np.max(np.abs(want["stress"])) > 0   # the bodies did collide
-    for field in ("position", "velocity", "stress", "temperature", "heat_flux"):
-        if field in want:   # the heat case's
+    for field in ("position", "velocity", "stress", "temperature", "heat_flux", "pore_pressure"):
+        if field in want:   # the heat case's, the saturated one's
             assert relative_difference(want[field], got[field]) <= TOLERANCE, field
     for name in ("thermal_energy", "boundary_heat"):   # the heat case's: sums over processes
         if name in reference_series:
