@@ -110,15 +110,34 @@ def _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r):
     return r
 
 
+@njit(cache=True)
+def add_hoop_pressure(idx, w, lower_r, h_r, nodes_r, first_r, volume, pressure, grid_force):
+    """f_rI += V_p p_p N_I(x_p) / r_p: a pore pressure's share of the hoop term (the total stress
+    is sigma' - p I, sigma_thth = sigma'_thth - p; solver/pore_fluid.py). Serial, as the pore
+    fluid's other passes are."""
+    nk = idx.shape[1]
+    for p in range(idx.shape[0]):
+        if pressure[p] == 0.0:   # a dry particle
+            continue
+        s = volume[p] * pressure[p] / _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
+        for k in range(nk):
+            grid_force[idx[p, k], 0] += w[p, k] * s
+
+
+def ring(x: np.ndarray) -> np.ndarray:
+    """2 pi r of each point: what a particle's plane volume and mass are multiplied by."""
+    return 2.0 * math.pi * x[:, 0]
+
+
 class Axisymmetry:
     """Turns the plane-strain state of a 2D scene into the axisymmetric one and adds its terms."""
 
     def __init__(self, scene, particles):
         self._lower_r, self._h_r = float(scene.grid_lower()[0]), float(scene.cell_sizes()[0])
         self._hoop_kinematics = hoop_kinematics_reference if scene.method.formulation == "tlmpm" else hoop_kinematics
-        ring = 2.0 * math.pi * particles.x[:, 0]
+        rings = ring(particles.x)
         for name in ("mass", "volume", "volume0"):
-            getattr(particles, name)[:] *= ring
+            getattr(particles, name)[:] *= rings
         n = particles.count
         F = np.zeros((n, 3, 3))
         F[:, :2, :2] = particles.F
@@ -136,6 +155,11 @@ class Axisymmetry:
         s = sim.stencil
         volume, stress = sim.formulation.hoop_measure(sim)   # V_p, sigma_p (ULMPM); V0_p, P_p (TLMPM)
         add_hoop_force(sim.spec, s.idx, s.w, *self._r, volume, stress, sim.grid.force, sim.copies.force)
+
+    def add_pore_pressure_force(self, sim, pressure) -> None:
+        """The pore pressure's hoop force (solver/pore_fluid.py calls it with its P2G)."""
+        s = sim.stencil
+        add_hoop_pressure(s.idx, s.w, *self._r, sim.particles.volume, pressure, sim.grid.force)
 
     def after_kinematics(self, sim, dt: float, v_grid) -> None:
         """The hoop components of L and F, and the volume with them."""

@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from solver import pore_kernels
+from solver.axisymmetric import ring
 from solver.loads import BodyLoads
 from solver.pore_fluid_schema import diffusion_time_step, initial_pore_pressure, mobility, saturated
 from solver.state import grid_geometry
@@ -75,6 +76,8 @@ class PoreFluid:
         self.scene = scene
         self.gravity = np.ascontiguousarray(BodyLoads(scene).gravity)   # b of Darcy's law (the body force is not)
         storage = particles.volume * particles.extra["pore_compliance"]
+        if scene.axisymmetric:   # (the rings' volumes, which Axisymmetry sets after this)
+            storage = storage * ring(particles.x)
         self.cutoff = STORAGE_CUTOFF_FRACTION * float(storage[storage > 0].min())
         self.diffusion_limit = diffusion_time_step(scene)[0]
         # (K_w / n) / rho of the stiffest saturated material: what the fluid adds to c^2
@@ -109,6 +112,8 @@ class PoreFluid:
         self.storage.fill(0.0)
         pore_kernels.pressure_to_grid(s.idx, s.w, s.dw, p.volume, x["pore_compliance"], pressure, self.storage,
                                       sim.grid.force)   # (the force's ghosts: the mechanics sums them next)
+        if sim.axisymmetry is not None:   # the hoop term of p's force; Darcy's and the squeeze's weak forms
+            sim.axisymmetry.add_pore_pressure_force(sim, pressure)   # take the rings' volumes and L_thth as they are
         sim.domain.sum_ghosts(self.storage)
         stored = self.storage[:, 0] > self.cutoff
         np.divide(self.storage[:, 1], self.storage[:, 0], out=self.grid_pressure, where=stored)

@@ -103,8 +103,6 @@ def _unsupported(scene) -> list[tuple[str, str]]:
         problems.append((path, f"is not supported yet with formulation {scene.method.formulation!r} (ulmpm only)"))
     if scene.method.scheme == "usf":   # (a Terzaghi column went unstable: the pore force lags the stress)
         problems.append((path, "is not supported yet with scheme 'usf' (usl and musl)"))
-    if scene.axisymmetric:
-        problems.append((path, "is not supported yet in an axisymmetric scene"))
     if scene.dimension == 1:
         problems.append((path, "is not supported yet in 1D (2D plane strain and 3D)"))
     if scene.contact.fields:

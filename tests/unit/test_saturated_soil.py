@@ -44,7 +44,6 @@ class TestValidation:
 
     @pytest.mark.parametrize("change, words", [
         ({"method": {"formulation": "tlmpm"}}, "formulation 'tlmpm'"),
-        ({"axisymmetric": True}, "axisymmetric"),
         ({"method": {"scheme": "usf"}}, "scheme 'usf'"),
         ({"contact": {"model": "friction"}}, "contact model 'friction'"),
     ])

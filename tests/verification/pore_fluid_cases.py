@@ -60,15 +60,19 @@ def terzaghi_degree(tv: float, terms: int = 2000) -> float:
 
 
 def column_scene(cells: int, end: float, drained: bool = True, model: str = "drucker_prager",
-                 fluid: dict = FLUID, dim: int = 2, damping: float | None = None) -> dict:
-    """The column, `cells` cells high and one wide (two in 3D: x and y), 2 particles per cell and axis."""
+                 fluid: dict = FLUID, dim: int = 2, damping: float | None = None, across: int = 1,
+                 axisymmetric: bool = False, swelling: bool = False) -> dict:
+    """The column, `cells` cells high and `across` wide (in 3D along x and y), 2 particles per cell
+    and axis; `axisymmetric`: a cylinder of radius across h about the y axis. `swelling`: unloaded,
+    from p = 0, its drained top held at p = q (see `consolidation`)."""
     h = HEIGHT / cells
-    width = [h] * (dim - 1)
+    width = [across * h] * (dim - 1)
     vertical = "xyz"[dim - 1]
     upper = width + [HEIGHT]
     walls = [{"type": "wall", "face": f"{'xyz'[a]}{side}", "mode": "slip"} for a in range(dim) for side in "-+"
              if not (a == dim - 1 and side == "+")]
-    conditions = walls + ([{"type": "pore_pressure", "face": f"{vertical}+", "pressure": 0.0}] if drained else [])
+    conditions = walls + ([{"type": "pore_pressure", "face": f"{vertical}+", "pressure": LOAD if swelling else 0.0}]
+                          if drained else [])
     scene = {
         "dimension": dim, "method": {"scheme": "musl", "shape_function": "linear"},
         "grid": {"lower": [0.0] * dim, "upper": upper, "cell_size": h},
@@ -88,6 +92,11 @@ def column_scene(cells: int, end: float, drained: bool = True, model: str = "dru
             scene["materials"]["soil"].pop(key)
     if damping is not None:
         scene["damping"] = {"type": "local", "coefficient": damping}
+    if axisymmetric:
+        scene["axisymmetric"] = True
+    if swelling:
+        scene["loads"] = []
+        del scene["bodies"][0]["initial_pore_pressure"]
     return scene
 
 
@@ -98,22 +107,27 @@ def run(scene: dict, until: float) -> ExplicitMPM:
     return sim
 
 
-def consolidation(cells: int, tvs=(0.05, 0.197, 0.848), dim: int = 2, model: str = "drucker_prager"
-                  ) -> dict[float, tuple[float, float]]:
+def consolidation(cells: int, tvs=(0.05, 0.197, 0.848), dim: int = 2, model: str = "drucker_prager",
+                  swelling: bool = False, **shape) -> dict[float, tuple[float, float]]:
     """{Tv: (U measured, largest isochrone error max |p - p_exact| / q)}; U from the mean pore
-    pressure, U = 1 - mean p / q (the column's particles all have one volume at the start)."""
+    pressure, U = 1 - mean p / q (the volume-weighted mean: an axisymmetric column's rings differ).
+    `swelling`: the unloaded column from p = 0 whose top is held at p = q takes the water in by the
+    same diffusion (the total stress stays 0, sigma' = p), p_exact = q - Terzaghi's, U = mean p / q.
+    `shape`: column_scene's `across` and `axisymmetric`."""
     cv = consolidation_coefficient()
     times = [tv * HEIGHT**2 / cv for tv in tvs]
-    scene = column_scene(cells, end=times[-1], dim=dim, model=model)
+    scene = column_scene(cells, end=times[-1], dim=dim, model=model, swelling=swelling, **shape)
     sim = ExplicitMPM(load_scene(scene))
     out = {}
     for tv, t in zip(tvs, times):
         while sim.time < t * (1 - 1e-12):
             sim.advance(min(sim.stable_time_step(0.5), t - sim.time))
-        p = sim.particles.extra["pore_pressure"]
+        p = sim.particles.extra["pore_pressure"] / LOAD
         depth = HEIGHT - sim.particles.x[:, dim - 1]
-        measured = 1 - float(np.dot(sim.particles.volume, p) / np.sum(sim.particles.volume)) / LOAD
-        error = float(np.max(np.abs(p / LOAD - terzaghi_pressure(depth, tv))))
+        exact = terzaghi_pressure(depth, tv)
+        mean = float(np.dot(sim.particles.volume, p) / np.sum(sim.particles.volume))
+        measured = mean if swelling else 1 - mean
+        error = float(np.max(np.abs(p - (1 - exact if swelling else exact))))
         out[tv] = (measured, error)
     return out
 

@@ -50,6 +50,26 @@ class TestTerzaghi:
         assert abs(measured[0.848][0] - 0.9) < 0.01
 
 
+class TestAxisymmetric:
+    """A cylinder of radius 3 h about the axis (slip at r = 3 h, the axis free to move but for
+    v_r = 0 there), unloaded, from p = 0, its top held at p = q: the water enters as in Terzaghi's
+    column (p = q - Terzaghi's, sigma' = p, the total stress 0), with no radial motion. The
+    pore pressure's hoop force V_p p_p N_I / r_p balances its radial gradient's; without it the
+    rings move out (v_r 0.07 m/s) and the isochrone is 6 q off at Tv = 0.848. Asserted: the
+    plane column's U and isochrone error to 1e-9 (round-off: measured 2e-15; the rings' volumes
+    change every sum's terms), and Terzaghi's U to the plane case's 0.01 (measured +0.0030 at
+    Tv = 0.197, +0.0025 at 0.848). (Swelling, not a loaded column: a `traction` load's shares
+    are the plane areas in an axisymmetric scene, not the rings'.)"""
+
+    def test_an_axisymmetric_column_swells_as_the_plane_one(self):
+        plane = pc.consolidation(10, tvs=(0.197, 0.848), swelling=True, across=3)
+        ring = pc.consolidation(10, tvs=(0.197, 0.848), swelling=True, across=3, axisymmetric=True)
+        for tv in (0.197, 0.848):
+            assert abs(ring[tv][0] - pc.terzaghi_degree(tv)) < 0.01, f"Tv = {tv}: U = {ring[tv][0]:.4f}"
+            assert ring[tv][0] == pytest.approx(plane[tv][0], abs=1e-9)
+            assert ring[tv][1] == pytest.approx(plane[tv][1], abs=1e-9)
+
+
 class TestUndrained:
     """A sealed column loaded at once and damped to rest: the pore water takes the share
     (K_w/n) / (K_w/n + E_oed) of the load, B ~ 1 for water. Asserted to 1e-4 (water: the
