@@ -66,6 +66,8 @@ CASES = {
     "cpdi-tet4": scene(SCENE_3D, method__shape_function="cpdi_tet4"),
     # a saturated column (solver/pore_fluid.py): its nodal pressure, flows and drained nodes across the slabs
     "pore": scene(PORE_2D),
+    # the same as a cylinder about the y axis (the pore pressure's hoop force; unloaded: the drained box drives it)
+    "pore-axisymmetric": scene(PORE_2D, axisymmetric=True, loads=[]),
     # tools (solver/tools.py): each process pushes its particles, the reactions are summed
     "tools": scene(SCENE_2D, tools=[{"name": "roller", "geometry": {"type": "sphere", "center": [0.5, 0.5],
                                                                     "radius": 0.16},
@@ -78,7 +80,7 @@ RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl"
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2), ("contact-density", 2), ("contact-density", 3),
         ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2), ("tools", 2), ("tools-tlmpm", 2),
-        ("pore", 2), ("pore", 3)]
+        ("pore", 2), ("pore", 3), ("pore-axisymmetric", 2)]
 
 
 @pytest.fixture(scope="module", autouse=True)
