@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from solver.axisymmetric import ring
 from solver.expressions import compile_expression
 from solver.geometry import from_spec
 from solver.scene import SceneError
@@ -125,20 +126,24 @@ def spread_forces(sim, rows: np.ndarray, force: np.ndarray) -> None:
 
 
 def _shares(scene, index: int, particles) -> np.ndarray:
-    """Each particle's share of load `index`: m_p / sum m (force) or A_p (traction)."""
+    """Each particle's share of load `index`: m_p / sum m (force) or A_p (traction). In an
+    axisymmetric scene a particle is a ring, 2 pi r times its plane mass and volume: the
+    particles are plane still here (as seeded; solver/axisymmetric.py makes them rings
+    later), so the ring factor is taken here, and a traction acts on the ring's area."""
     load = scene.loads[index]
     body = next(b for b, candidate in enumerate(scene.bodies) if candidate.name == load.body)
     mine = np.flatnonzero(particles.body == body)
     where = from_spec(load.where).contains(particles.x[mine])
+    rings = ring(particles.x[mine]) if scene.axisymmetric else np.ones(mine.size)
     share = np.zeros(particles.count)
     if load.type == "force":
         chosen = mine[where]
-        mass = particles.mass[chosen]
+        mass = particles.mass[chosen] * rings[where]
         if mass.sum() > 0:
             share[chosen] = mass / mass.sum()
     else:
         spec = scene.bodies[body]
-        _, area = surface_areas(particles.x[mine], particles.volume0[mine], scene.grid_lower(),
+        _, area = surface_areas(particles.x[mine], particles.volume0[mine] * rings, scene.grid_lower(),
                                 body_spacing(scene, spec))
         share[mine[where]] = area[where]
     if not np.any(share):

@@ -58,6 +58,32 @@ def test_traction_on_a_box_face_sums_to_traction_times_length():
     np.testing.assert_allclose(force, [3.0 * 0.1, 1.0 * 0.1], rtol=1e-12)
 
 
+def test_axisymmetric_loads_act_on_rings():
+    """An axisymmetric cylinder (x = r): its top face's particles are rings, so a traction t
+    on it sums to t pi R^2 (exact: the ring areas 2 pi r_p h/ppc at the midpoints r_p sum to
+    pi R^2), each particle's share grows as its radius, and a force load is shared by ring
+    mass. (Shared by plane lengths, the traction summed to t R and pressed the axis hardest.)"""
+    radius, top = 0.1, 0.55
+    cylinder = bar(axisymmetric=True,
+                   grid={"lower": [0.0, 0.3], "upper": [0.2, 0.7], "cell_size": 0.025},
+                   bodies=[{"name": "beam", "material": "m", "particles_per_cell": 2,
+                            "geometry": {"type": "box", "lower": [0.0, 0.45], "upper": [radius, top]}}],
+                   loads=[{"type": "traction", "body": "beam",
+                           "where": {"type": "box", "lower": [0.0, top - 0.01], "upper": [0.2, 0.7]},
+                           "traction": [0.0, -1000.0]},
+                          {"type": "force", "body": "beam",
+                           "where": {"type": "box", "lower": [0.0, top - 0.01], "upper": [0.2, 0.7]},
+                           "force": [0.0, -1.0]}])
+    sim = ExplicitMPM(load_scene(cylinder))
+    p = sim.particles
+    traction, force = p.extra[AppliedLoads.SHARE][:, 0], p.extra[AppliedLoads.SHARE][:, 1]
+    loaded = traction > 0
+    assert np.count_nonzero(loaded) == 8   # the top row: 4 cells x 2 particles across r
+    np.testing.assert_allclose(traction.sum(), math.pi * radius**2, rtol=1e-12)
+    np.testing.assert_allclose(traction[loaded] / p.x[loaded, 0], traction[loaded][0] / p.x[loaded, 0][0], rtol=1e-12)
+    np.testing.assert_allclose(force[loaded], p.mass[loaded] / p.mass[loaded].sum(), rtol=1e-12)   # ring masses now
+
+
 def test_disk_surface_lies_on_the_circle_and_a_pressure_has_no_net_force():
     """A disk of radius 0.3 seeded 2 x 2 per 2 cm cell: the surface particles lie within
     one cell inside the circle; the outward area vectors sum to zero exactly, so a
