@@ -38,7 +38,7 @@ def test_validate_prints_the_summary(capsys):
     assert "416  (disk1 208, disk2 208)" in out   # E2: 416 particles
     assert "441  (20 x 20 cells)" in out
     assert "estimated steps     3,500" in out
-    assert "memory" in out and "KiB" in out
+    assert "memory" in out and "MiB" in out   # the run's peak, with the process baseline
     assert "estimated run time" in out
 
 
