@@ -184,6 +184,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if not parallel.is_root():   # with several processes rank 0 reports, the others compute
         result = run(scene, out_dir, resume=args.resume is not None, checkpoint_seconds=args.checkpoint_seconds)
+        parallel.all_ranks_done()   # (rank 0 has reported: EXIT_PARTIAL here makes mpiexec stop it)
         return EXIT_OK if result.status == "complete" else EXIT_PARTIAL
 
     progress: Callable[[Any], None] | None = None
@@ -216,6 +217,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         balance = _balance_line(done["result_path"])
         if balance:
             print(balance)
+    parallel.all_ranks_done()
     if done["status"] == "complete":
         return EXIT_OK
     print(f"mpm run: the run ended early ({done['reason']}): {done['message']}", file=sys.stderr)

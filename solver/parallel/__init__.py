@@ -34,3 +34,13 @@ def is_root() -> bool:
     """True on rank 0 and in a single-process run: the process that reports and writes."""
     started = launch.world()
     return started is None or started[0] == 0
+
+
+def all_ranks_done() -> None:
+    """Wait for every rank of a run started by mpiexec: a rank that exits with a non-zero
+    code (a partial run) makes mpiexec abort the others, and rank 0 may still be writing
+    the result's last lines and its report. Nothing to wait for in one process."""
+    started = launch.world()
+    if started is not None and started[1] > 1:
+        from mpi4py import MPI
+        MPI.COMM_WORLD.Barrier()
