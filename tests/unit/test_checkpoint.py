@@ -203,14 +203,16 @@ def test_the_checkpoint_replaces_the_previous_one_atomically(tmp_path, monkeypat
 
 
 def assert_resumes_alike(scene, tmp_path, monkeypatch):
-    """A run stopped after 41 progress calls and resumed gives the uninterrupted run's result."""
+    """A run stopped after 41 progress calls and resumed gives the uninterrupted run's
+    result; returns the uninterrupted run's."""
     reference = run(scene, tmp_path / "reference")
     monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
     stopped = run(scene, tmp_path / "resumed", should_stop=stop_after(41))
-    assert stopped.status == "partial"
+    assert stopped.status == "partial" and stopped.reason == "cancelled"
     resumed = run(scene, tmp_path / "resumed", resume=True)
     assert resumed.steps == reference.steps
     assert_same_result(reference.result_path, resumed.result_path)
+    return reference
 
 
 def test_a_conducting_run_resumes_to_the_same_temperatures_and_boundary_heat(tmp_path, monkeypatch):
@@ -244,12 +246,6 @@ def test_a_run_with_a_tool_resumes_to_the_same_result(tmp_path, monkeypatch):
     scene = column()
     scene["tools"] = [{"name": "press", "geometry": {"type": "box", "lower": [0.25, 0.29], "upper": [0.35, 0.4]},
                        "velocity": [0.0, "-0.2 * t"], "stiffness": 2.0, "friction": 0.2}]
-    reference = run(scene, tmp_path / "reference")
-    monkeypatch.setattr(runner, "PROGRESS_INTERVAL_S", 0.0)
-    stopped = run(scene, tmp_path / "cut", should_stop=stop_after(41))
-    assert stopped.reason == "cancelled"
-    resumed = run(scene, tmp_path / "cut", resume=True)
-    assert resumed.steps == reference.steps
-    assert_same_result(reference.result_path, resumed.result_path)
+    reference = assert_resumes_alike(scene, tmp_path, monkeypatch)
     series = read_series(reference.result_path)
     assert series["reaction_press_y"].max() > 0 and series["tool_work"][-1] != 0   # the tool did push

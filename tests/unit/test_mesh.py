@@ -14,8 +14,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "verification"))
 from mesh_shapes import ascii_stl, binary_stl, cube, icosphere, obj  # noqa: E402
 
 from solver import mesh  # noqa: E402
-from solver.scene import SceneError, load_scene  # noqa: E402
+from solver.scene import load_scene  # noqa: E402
 from solver.seeding import seed  # noqa: E402
+from tests.scene_errors import errors_of
 
 
 def mesh_scene(geometry: dict) -> dict:
@@ -31,11 +32,6 @@ def mesh_scene(geometry: dict) -> dict:
 def data_geometry(raw: bytes, fmt: str = "stl", **extra) -> dict:
     return {"type": "mesh", "data": base64.b64encode(raw).decode(), "format": fmt, **extra}
 
-
-def errors_of(scene, **options) -> list[dict]:
-    with pytest.raises(SceneError) as caught:
-        load_scene(scene, **options)
-    return caught.value.errors
 
 
 @pytest.mark.parametrize("writer,fmt", [(binary_stl, "stl"), (ascii_stl, "stl"), (obj, "obj")])

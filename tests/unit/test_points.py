@@ -10,6 +10,7 @@ import pytest
 
 from solver.scene import SceneError, load_scene
 from solver.seeding import count_particles, seed
+from tests.scene_errors import errors_of
 
 POSITIONS = [[0.15, 0.15], [0.55, 0.25], [0.35, 0.75]]   # cells apart: they do not touch
 VOLUMES = [1e-4, 2e-4, 3e-4]
@@ -24,11 +25,6 @@ def points_scene(geometry: dict) -> dict:
         "time": {"end": 0.01},
     }
 
-
-def errors_of(scene) -> list[dict]:
-    with pytest.raises(SceneError) as caught:
-        load_scene(scene)
-    return caught.value.errors
 
 
 def test_inline_points_are_the_particles():

@@ -8,8 +8,9 @@ import pytest
 
 from solver import fields, stability
 from solver.pore_fluid_schema import G_N
-from solver.scene import SceneError, load_scene
+from solver.scene import load_scene
 from solver.stepper import ExplicitMPM
+from tests.scene_errors import errors_of
 
 WATER = {"bulk_modulus": 2.2e9, "density": 1000.0, "hydraulic_conductivity": 1.0e-8, "porosity": 0.5}
 SOIL = {"model": "drucker_prager", "density": 2000.0, "youngs_modulus": 1.0e7, "poisson_ratio": 0.3,
@@ -25,11 +26,6 @@ def scene(material=None, conditions=(), body=None, **top):
     out.update(top)
     return out
 
-
-def errors_of(data) -> list[dict]:
-    with pytest.raises(SceneError) as caught:
-        load_scene(data)
-    return caught.value.errors
 
 
 class TestValidation:

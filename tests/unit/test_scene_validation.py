@@ -10,6 +10,7 @@ import pytest
 
 from solver import capabilities
 from solver.scene import Limits, Scene, SceneError, load_scene
+from tests.scene_errors import errors_of
 
 
 def two_disks() -> dict:
@@ -48,11 +49,6 @@ def block_3d() -> dict:
         "time": {"end": 0.01},
     }
 
-
-def errors_of(scene) -> list[dict]:
-    with pytest.raises(SceneError) as caught:
-        load_scene(scene)
-    return caught.value.errors
 
 
 def changed(base, path: str, value):

@@ -10,9 +10,10 @@ import pytest
 
 from solver import run
 from solver.results import read_frame, read_series
-from solver.scene import SceneError, load_scene
+from solver.scene import load_scene
 from solver.stepper import ExplicitMPM
 from solver.summary import summarize
+from tests.scene_errors import errors_of
 
 BAR = {"model": "linear_elastic", "density": 2.0, "youngs_modulus": 1.0, "poisson_ratio": 0.0,
        "thermal_conductivity": 4.0, "specific_heat": 3.0}
@@ -28,11 +29,6 @@ def scene(dim=1, material=None, conditions=(), dt=None, **top):
     out.update(top)
     return out
 
-
-def errors_of(data) -> list[dict]:
-    with pytest.raises(SceneError) as caught:
-        load_scene(data)
-    return caught.value.errors
 
 
 class TestValidation:
