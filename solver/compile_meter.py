@@ -5,10 +5,13 @@ import time
 
 from numba.core import event as numba_event
 
+from solver.kernel_cache import is_solver_kernel
+
 
 class CompileMeter(numba_event.Listener):
-    """Counts numba's compilations (cache misses: a kernel loaded from the cache is not one)
-    and the wall time spent in them, outermost compilations only; `with CompileMeter() as m:`."""
+    """Counts the solver's kernels numba compiles (cache misses: a kernel loaded from the
+    cache is not one; numba's own functions compiled inside a kernel are not counted) and
+    the wall time spent compiling, outermost compilations only; `with CompileMeter() as m:`."""
 
     def __init__(self) -> None:
         super().__init__()
@@ -18,7 +21,7 @@ class CompileMeter(numba_event.Listener):
         self._started = 0.0
 
     def on_start(self, event) -> None:
-        self.count += 1
+        self.count += is_solver_kernel(event.data["dispatcher"])
         if self._depth == 0:
             self._started = time.perf_counter()
         self._depth += 1

@@ -11,7 +11,10 @@ follow, each of which made processes compile again or run stale code:
   index drop each other's entries (numba empties an index written by another version);
 * processes that save at once lose entries: numba numbers data files 1, 2, ... after
   reading the index, so two savers write the same data file, and the later index
-  write drops the other's entry.
+  write drops the other's entry;
+* processes started together each compile the kernels they share (the service's
+  warm-up, test workers, a run and its precompile helper), since none finds the
+  other's entry until it is saved.
 
 So `install()` gives numba a locator for the solver's files (and the generated modules)
 that keeps every entry in `<MPM_CACHE_DIR>/v-<digest>/`, where the digest covers the
@@ -19,8 +22,10 @@ text of every solver source and the compiler stack: a changed callee is a new fo
 checkouts of one version share one, and no version sees another's. Entries are named
 by their place in the package, never by the checkout's path. A save holds a lock on
 the index, reads it again, writes the data file (named by the entry's key, so savers
-never share a file) and only then the index entry. Folders unused for PRUNE_DAYS are
-removed.
+never share a file) and only then the index entry. A compilation holds a lock on the
+kernel's index too, taken before numba looks in the cache: a process that wants a kernel
+another is compiling waits for it and loads it, so each kernel is compiled once however many
+processes start together (`_compile_once`). Folders unused for PRUNE_DAYS are removed.
 """
 from __future__ import annotations
 
@@ -87,6 +92,7 @@ def _kernels_folder(py_file: str) -> Path | None:
     return None
 
 
+@cache
 def _locator_class():
     from numba.core import caching
 
@@ -137,6 +143,62 @@ def _index_file_class():
     return LockedIndexDataCacheFile
 
 
+def is_solver_kernel(dispatcher) -> bool:
+    """Whether a numba dispatcher is one of the solver's cached kernels (not one of numba's
+    own functions, which it compiles inside a kernel's compilation and never caches)."""
+    locator = getattr(getattr(getattr(dispatcher, "_cache", None), "_impl", None), "locator", None)
+    return isinstance(locator, _locator_class())
+
+
+class _CompileLocks:
+    """Per kernel index, an exclusive lock on `<index>.compiling` held while a process
+    looks for the kernel in the cache and, on a miss, compiles and saves it. Taken under
+    numba's compiler lock (one compilation at a time in a process) and reentrant, since a
+    kernel compiles its callees inside its own compilation. Processes cannot wait on each
+    other in a circle: a process holding a kernel's lock asks only for its callees' locks."""
+
+    def __init__(self) -> None:
+        self._held: dict[str, list] = {}     # path -> [open file, depth]
+
+    @contextlib.contextmanager
+    def hold(self, path: str):
+        held = self._held.get(path)
+        if held is None:
+            try:
+                handle = open(path, "a")
+            except OSError:                  # a read-only cache: compile without the lock
+                yield
+                return
+            fcntl.flock(handle, fcntl.LOCK_EX)
+            held = self._held[path] = [handle, 0]
+        held[1] += 1
+        try:
+            yield
+        finally:
+            held[1] -= 1
+            if held[1] == 0:
+                del self._held[path]
+                fcntl.flock(held[0], fcntl.LOCK_UN)
+                held[0].close()
+
+
+def _compile_once(original):
+    """numba's Dispatcher.compile, under the kernel's compile lock for the solver's kernels."""
+    from numba.core.compiler_lock import global_compiler_lock
+
+    locks = _CompileLocks()
+
+    def compile(self, sig):
+        if not is_solver_kernel(self):
+            return original(self, sig)
+        index = self._cache._cache_file._index_path
+        with global_compiler_lock, locks.hold(index[:-len(".nbi")] + ".compiling"):
+            return original(self, sig)
+
+    compile.__wrapped__ = original
+    return compile
+
+
 _installed = False
 
 
@@ -146,10 +208,11 @@ def install() -> None:
     global _installed
     if _installed:
         return
-    from numba.core import caching
+    from numba.core import caching, dispatcher
 
     caching.CacheImpl._locator_classes.insert(0, _locator_class())
     caching.IndexDataCacheFile = _index_file_class()
+    dispatcher.Dispatcher.compile = _compile_once(dispatcher.Dispatcher.compile)
     _installed = True
     with contextlib.suppress(OSError):
         _mark_used(version_folder())
