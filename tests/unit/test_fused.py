@@ -28,6 +28,13 @@ TOLERANCE = 1e-12
 STEPS = 60
 
 
+def slow(*values):
+    """A case left out of the default run (`-m slow` runs it): a 3D variant more of a feature
+    that the default run checks in 3D once already. Each 3D kernel variant compiles for 40-70 s
+    on one core, which is most of a cold run."""
+    return pytest.param(*values, marks=pytest.mark.slow)
+
+
 @pytest.fixture
 def reproducible(monkeypatch):
     """Fused kernels compiled without FMA contraction (MPM_FMA=0; by default they contract:
@@ -76,8 +83,10 @@ def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
 
 
-@pytest.mark.parametrize("dimension", [2, 3])
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method,dimension", [
+    *((method, 2) for method in METHODS),
+    ("musl-quadratic-apic", 3), ("usl-quadratic-mls", 3),
+    *(slow(method, 3) for method in METHODS if method not in ("musl-quadratic-apic", "usl-quadratic-mls"))])
 def test_fused_step_gives_the_general_step(dimension, method):
     scene = load_scene({**(SCENE_2D if dimension == 2 else SCENE_3D), "method": METHODS[method]})
     fast, general = ExplicitMPM(scene), ExplicitMPM(scene)
@@ -282,7 +291,7 @@ def test_the_contracted_kernels_leave_the_weights_they_call_uncontracted():
 
 @pytest.mark.parametrize("dimension,method,threads", [
     (2, "musl-linear-flip", 1), (2, "musl-linear-flip", 2), (3, "musl-linear-flip", 2),
-    (2, "musl-quadratic-mls", 2), (3, "musl-quadratic-apic", 1)])
+    (2, "musl-quadratic-mls", 2), slow(3, "musl-quadratic-apic", 1)])
 def test_fused_conduction_gives_the_separate_thermal_passes(dimension, method, threads, reproducible):
     """The thermal kernels do thermal_kernels.py's sums in the same order on the same weights
     (compiled without FMA contraction, `reproducible`, as the separate passes are).
@@ -353,8 +362,8 @@ def in_contact(dimension: int, method: str, threads: int) -> dict:
 
 @pytest.mark.parametrize("dimension,method,threads", [
     (2, "musl-linear-flip", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-apic", 2), (2, "usl-quadratic-mls", 1),
-    (3, "musl-linear-flip", 2), (3, "usl-quadratic-flip", 1), (3, "musl-quadratic-apic", 1),
-    (3, "musl-quadratic-mls", 2)])
+    slow(3, "musl-linear-flip", 2), slow(3, "usl-quadratic-flip", 1), (3, "musl-quadratic-apic", 1),
+    slow(3, "musl-quadratic-mls", 2)])
 def test_fused_contact_gives_the_general_step(dimension, method, threads):
     """The fused kernels shift each particle's nodes into its body's field and scatter the
     contact's presence and normals in P2G, as the hook's pass over the stored stencil does:
@@ -428,7 +437,7 @@ def stepped_with_and_without(scene, switch: str) -> tuple:
 
 
 @pytest.mark.parametrize("material,dimension,method,threads", [
-    (NEO_HOOKEAN, 2, "usl-quadratic-mls", 1), (NEO_HOOKEAN, 3, "usl-quadratic-mls", 2),
+    (NEO_HOOKEAN, 2, "usl-quadratic-mls", 1), slow(NEO_HOOKEAN, 3, "usl-quadratic-mls", 2),
     (NEO_HOOKEAN, 2, "musl-quadratic-apic", 2), (NEO_HOOKEAN, 2, "usl-linear-pic", 1),
     (FLUID, 2, "usl-quadratic-mls", 2), (FLUID, 3, "usl-quadratic-mls", 1), (FLUID, 2, "musl-quadratic-apic", 1),
     (LINEAR_FLUID, 2, "usl-quadratic-mls", 1), (LINEAR_FLUID, 2, "usl-linear-pic", 2)])
@@ -475,8 +484,8 @@ def test_the_stress_pass_runs_where_p2g_cannot_form_the_stress(extra):
 # -- the stress updated inside G2P (a rate model whose update is a function of L_p) ---------------
 
 @pytest.mark.parametrize("dimension,method,threads", [
-    (3, "musl-linear-flip", 1), (3, "musl-linear-flip", 2), (2, "usl-quadratic-apic", 2),
-    (3, "usl-quadratic-mls", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-mls", 1)])
+    slow(3, "musl-linear-flip", 1), (3, "musl-linear-flip", 2), (2, "usl-quadratic-apic", 2),
+    slow(3, "usl-quadratic-mls", 1), (2, "usl-linear-pic", 2), (2, "musl-quadratic-mls", 1)])
 def test_the_stress_updated_in_g2p_gives_the_stress_pass_bit_for_bit(dimension, method, threads, reproducible):
     """A linear elastic scene's fused G2P (USL's pass, MUSL's kinematics pass) updates sigma_p
     from the L_p it has just formed, and the stress pass does nothing: the same operations in the
