@@ -20,8 +20,10 @@ FAULT_ENV = {
 
 
 def fault_env(data_dir: Path) -> dict[str, str]:
-    """The environment without the caller's MPM_* settings, with FAULT_ENV."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith("MPM_")}
+    """The environment without the caller's MPM_* settings, with FAULT_ENV; but MPM_FMA, which
+    the kernels are compiled with (tests/conftest.py): the tests compare the service's results
+    with a run of this process bit for bit."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("MPM_") or k == "MPM_FMA"}
     return {**env, **FAULT_ENV, "MPM_DATA_DIR": str(data_dir)}
 
 
