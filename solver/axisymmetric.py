@@ -37,9 +37,8 @@ volume and stress (`hoop_measure`), the stencil's weights which radius.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
+from solver.geometry import ring
 from solver.jit import njit, prange
 
 from solver.threads import add_node_copies, block_bounds, own
@@ -122,11 +121,6 @@ def add_hoop_pressure(idx, w, lower_r, h_r, nodes_r, first_r, volume, pressure, 
         s = volume[p] * pressure[p] / _radius(idx, w, p, nk, lower_r, h_r, nodes_r, first_r)
         for k in range(nk):
             grid_force[idx[p, k], 0] += w[p, k] * s
-
-
-def ring(x: np.ndarray) -> np.ndarray:
-    """2 pi r of each point: what a particle's plane volume and mass are multiplied by."""
-    return 2.0 * math.pi * x[:, 0]
 
 
 class Axisymmetry:

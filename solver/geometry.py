@@ -301,3 +301,9 @@ def from_spec(spec) -> Geometry:
 
 def _vector(values) -> np.ndarray:
     return np.asarray(values, dtype=np.float64)
+
+
+def ring(x: np.ndarray) -> np.ndarray:
+    """2 pi r of each point (x = r in an axisymmetric scene): what a particle's plane volume
+    and mass are multiplied by to become the ring it sweeps around the axis."""
+    return 2.0 * np.pi * x[:, 0]

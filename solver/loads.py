@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from solver.expressions import compile_expression
-from solver.geometry import from_spec
+from solver.geometry import from_spec, ring
 from solver.scene import SceneError
 from solver.state import make_stencil
 from solver.surface import body_spacing, surface_areas
@@ -133,7 +133,7 @@ def _shares(scene, index: int, particles) -> np.ndarray:
     body = next(b for b, candidate in enumerate(scene.bodies) if candidate.name == load.body)
     mine = np.flatnonzero(particles.body == body)
     where = from_spec(load.where).contains(particles.x[mine])
-    rings = _rings(particles.x[mine]) if scene.axisymmetric else np.ones(mine.size)
+    rings = ring(particles.x[mine]) if scene.axisymmetric else np.ones(mine.size)
     share = np.zeros(particles.count)
     if load.type == "force":
         chosen = mine[where]
@@ -150,10 +150,3 @@ def _shares(scene, index: int, particles) -> np.ndarray:
         raise SceneError([{"path": f"loads[{index}].where",
                            "message": f"contains none of the {what} of body {load.body!r}"}])
     return share
-
-
-def _rings(x: np.ndarray) -> np.ndarray:
-    # imported here: solver/axisymmetric.py holds kernels, and the service's summary imports
-    # this module without numba (tests/unit/test_registry.py)
-    from solver.axisymmetric import ring
-    return ring(x)

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 from solver import pore_kernels
-from solver.axisymmetric import ring
+from solver.geometry import ring
 from solver.loads import BodyLoads
 from solver.pore_fluid_schema import diffusion_time_step, initial_pore_pressure, mobility, saturated
 from solver.state import grid_geometry
