@@ -1,6 +1,6 @@
 // One job's page (#/jobs/ID): its status and progress, results, energies, scene and solver log.
 import { ACTIVE, ApiError, ConnectionLost, api, fetchBlob, getOrNull, jobUrl } from "./api.js";
-import { badge, h, progressBar, saveBlob, statRows } from "./dom.js";
+import { badge, h, progressBar, saveBlob, setStatRows, updateProgressBar } from "./dom.js";
 import { fmtDuration, fmtInteger, fmtNumber, fmtTime, wallSeconds } from "./format.js";
 import { jsonView } from "./json.js";
 import { ENERGY_SERIES, energyPlot, plotWidth } from "./plot.js";
@@ -81,9 +81,11 @@ class JobPage {
     this.title.textContent = record.name || "(unnamed)";
     document.title = `${record.name || this.id} · MPM`;
     this.status.replaceChildren(badge(record.status));
-    this.progress.replaceChildren(progressBar(record));
-    this.stats.replaceChildren(...statRows(recordRows(record)));
-    this.energyNow.replaceChildren(...statRows(energyRows(record.energies || {})));
+    const bar = this.progress.firstElementChild;
+    if (bar) updateProgressBar(bar, record);
+    else this.progress.append(progressBar(record));
+    setStatRows(this.stats, recordRows(record));
+    setStatRows(this.energyNow, energyRows(record.energies || {}));
     this.errorBox.hidden = !record.error;
     this.errorBox.replaceChildren(h("strong", {}, "Diagnostic"), h("pre", {}, record.error || ""));
     const active = ACTIVE.has(record.status);
