@@ -18,23 +18,45 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 
 from solver import cost
 from solver.thread_count import available_cores
 
-# Load average below (cores - IDLE_MARGIN): a core is free. On a busy machine a second
-# compiling process only takes time from the run.
-IDLE_MARGIN = 1.0
+# A core counts as free when at least this much of one sat idle over IDLE_WINDOW seconds just
+# now. Not the load average: it trails by a minute, so a run started right after another one
+# (a compile is a core busy for tens of seconds) saw no free core and compiled alone.
+IDLE_CORE = 0.75
+IDLE_WINDOW = 0.2
 
 
 def wanted(scene) -> bool:
     """A cold, single-process run on a machine with a core to spare."""
     if os.environ.get("MPM_PRECOMPILE", "1") == "0" or scene.parallel.processes > 1:
         return False
-    cores = available_cores()
-    if cores < 2 or os.getloadavg()[0] > cores - IDLE_MARGIN:
+    if available_cores() < 2 or cost.is_compiled(scene):
         return False
-    return not cost.is_compiled(scene)
+    return idle_cores() >= IDLE_CORE
+
+
+def idle_cores() -> float:
+    """How many cores sat idle over the last IDLE_WINDOW seconds (Linux: /proc/stat's idle and
+    iowait ticks of all cores), else the cores the load average leaves."""
+    try:
+        before = _cpu_ticks()
+        time.sleep(IDLE_WINDOW)
+        after = _cpu_ticks()
+    except (OSError, ValueError, IndexError):
+        return available_cores() - os.getloadavg()[0]
+    idle, total = after[0] - before[0], after[1] - before[1]
+    return (os.cpu_count() or 1) * idle / total if total > 0 else 0.0
+
+
+def _cpu_ticks() -> tuple[int, int]:
+    """(idle + iowait, all) ticks of the machine's cores since boot, from /proc/stat's first line."""
+    with open("/proc/stat") as stat:
+        ticks = [int(field) for field in stat.readline().split()[1:]]
+    return ticks[3] + ticks[4], sum(ticks)
 
 
 def coarse(document: dict) -> dict:

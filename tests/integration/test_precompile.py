@@ -42,3 +42,32 @@ def test_after_the_helper_a_run_compiles_almost_nothing(tmp_path):
                           capture_output=True, text=True, timeout=600)
     everything = json.loads(cold.stdout.splitlines()[-1])["compiled"]
     assert final["compiled"] <= everything // 3, (final["compiled"], everything)
+
+
+def _machine(monkeypatch, idle_now: float, load_average: float, cores: int = 2):
+    """A machine of `cores` cores whose /proc/stat shows `idle_now` cores idle over the window
+    and whose 1-minute load average is `load_average`; the scene's variant never compiled."""
+    ticks = iter([(0, 0), (int(100 * idle_now), 100 * cores)])
+    monkeypatch.setattr(precompile, "_cpu_ticks", lambda: next(ticks))
+    monkeypatch.setattr(precompile, "IDLE_WINDOW", 0.0)
+    monkeypatch.setattr(os, "cpu_count", lambda: cores)
+    monkeypatch.setattr(os, "getloadavg", lambda: (load_average,) * 3)
+    monkeypatch.setattr(precompile, "available_cores", lambda: cores)
+    monkeypatch.setattr(precompile.cost, "is_compiled", lambda scene: False)
+    monkeypatch.delenv("MPM_PRECOMPILE", raising=False)
+
+
+def test_a_run_right_after_a_busy_minute_gets_its_helper_when_a_core_is_idle_now(monkeypatch):
+    """The load average trails by a minute: after a compile it says the machine is busy while a
+    core sits idle (the gate used it, and back-to-back cold runs compiled alone)."""
+    _machine(monkeypatch, idle_now=0.95, load_average=1.9)
+    assert precompile.wanted(load_scene(SCENE))
+
+
+def test_no_helper_when_no_core_is_idle_now(monkeypatch):
+    _machine(monkeypatch, idle_now=0.3, load_average=0.2)
+    assert not precompile.wanted(load_scene(SCENE))
+
+
+def test_the_idle_cores_read_from_the_machine_are_within_its_cores():
+    assert 0.0 <= precompile.idle_cores() <= (os.cpu_count() or 1) + 1e-9
