@@ -346,10 +346,16 @@ def cmd_preview(args: argparse.Namespace) -> int:
     else:
         frame = "last" if args.frame == -1 else str(args.frame)
         out = result.parent / f"preview-{frame}{'-' + args.field if args.field else ''}.png"
+    return _drawn("preview", out, lambda: render_preview(result, frame=args.frame, field=args.field, out=out))
+
+
+def _drawn(command: str, out: Path, draw) -> int:
+    """Run `draw` (it writes `out`) and print the file's path; a result it cannot read is an error
+    line naming the command."""
     try:
-        render_preview(result, frame=args.frame, field=args.field, out=out)
+        draw()
     except (OSError, ValueError, IndexError) as error:
-        print(f"mpm preview: error: {error}", file=sys.stderr)
+        print(f"mpm {command}: error: {error}", file=sys.stderr)
         return EXIT_ERROR
     print(out)
     return EXIT_OK
@@ -377,13 +383,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
 
     result = Path(args.result)
     out = Path(args.output) if args.output else result.parent / "animation.gif"
-    try:
-        render_animation(result, out, field=args.field, fps=args.fps or DEFAULT_FPS)
-    except (OSError, ValueError, IndexError) as error:
-        print(f"mpm animate: error: {error}", file=sys.stderr)
-        return EXIT_ERROR
-    print(out)
-    return EXIT_OK
+    return _drawn("animate", out, lambda: render_animation(result, out, field=args.field, fps=args.fps or DEFAULT_FPS))
 
 
 # -- mpm examples ------------------------------------------------------------
