@@ -122,6 +122,12 @@ def case_table() -> None:
         (share, mean, exact), wall = timed(pc.undrained, fluid, end)
         print(f"| undrained, {label} | {share:.6f} | {exact:.6f} | {mean:.6f} | {wall:.1f} |", flush=True)
     print()
+    print("| seepage to rest, 10 cells, Tv = 2.5 | max abs(p - rho_w g (H - z)) / (rho_w g H) | wall (s) |")
+    print("|---|---|---|")
+    for label, as_body_force in (("gravity", False), ("gravity as body_force", True)):
+        error, wall = timed(pc.seepage_to_hydrostatic, gravity_as_body_force=as_body_force)
+        print(f"| {label} | {np.abs(error).max():.4f} | {wall:.1f} |", flush=True)
+    print()
     print("| cells | front speed (m/s) | exact c (m/s) | error | front spreading (the tolerance) | wall (s) |")
     print("|---|---|---|---|---|---|")
     for cells in (10, 20, 40, 80):

@@ -36,7 +36,6 @@ import numpy as np
 
 from solver import pore_kernels
 from solver.geometry import ring
-from solver.loads import BodyLoads
 from solver.pore_fluid_schema import diffusion_time_step, initial_pore_pressure, mobility, saturated
 from solver.state import grid_geometry
 from solver.thermal import held_node_values
@@ -74,7 +73,6 @@ class PoreFluid:
 
     def __init__(self, scene, particles):
         self.scene = scene
-        self.gravity = np.ascontiguousarray(BodyLoads(scene).gravity)   # b of Darcy's law (the body force is not)
         storage = particles.volume * particles.extra["pore_compliance"]
         if scene.axisymmetric:   # (the rings' volumes, which Axisymmetry sets after this)
             storage = storage * ring(particles.x)
@@ -122,8 +120,9 @@ class PoreFluid:
         self.grid_pressure[self.held.node] = self.held.value
         sim.domain.share_nodes(self.grid_pressure)
         self.inflow.fill(0.0)
+        # b of Darcy's law: the step's body acceleration (gravity and the body force), as the mixture's
         pore_kernels.darcy_to_grid(s.idx, s.dw, self.grid_pressure, x["pore_mobility"], x["pore_fluid_density"],
-                                   self.gravity, p.volume, x["darcy_flux"], self.inflow)
+                                   sim.phases.acceleration, p.volume, x["darcy_flux"], self.inflow)
         sim.domain.sum_ghosts(self.inflow)
         np.divide(self.dt * self.inflow, self.storage[:, 0], out=self.change, where=stored)
         self.change[~stored] = 0.0

@@ -31,18 +31,21 @@ def pressure_to_grid(idx, w, dw, volume, compliance, pressure, storage, force):
 
 
 @njit(cache=True)
-def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, gravity, volume, flux, inflow):
-    """q_p = -(k / (rho_w g_n)) (grad p - rho_w g) with grad p = sum_I p_I grad phi_I(x_p)
-    (Darcy), and Q_I += V_p q_p . grad phi_I."""
+def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, acc, volume, flux, inflow):
+    """q_p = -(k / (rho_w g_n)) (grad p - rho_w b_p) with grad p = sum_I p_I grad phi_I(x_p)
+    (Darcy), and Q_I += V_p q_p . grad phi_I. acc: the step's body acceleration b, a row a
+    particle or one row for all."""
     dim = dw.shape[2]
+    shared = acc.shape[0] == 1
     for p in range(idx.shape[0]):
         if mobility[p] == 0.0:
             continue
+        row = 0 if shared else p
         for a in range(dim):
             gradient = 0.0
             for k in range(idx.shape[1]):
                 gradient += grid_pressure[idx[p, k]] * dw[p, k, a]
-            flux[p, a] = -mobility[p] * (gradient - fluid_density[p] * gravity[a])
+            flux[p, a] = -mobility[p] * (gradient - fluid_density[p] * acc[row, a])
         for k in range(idx.shape[1]):
             q = 0.0
             for a in range(dim):

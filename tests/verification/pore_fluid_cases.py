@@ -132,6 +132,25 @@ def consolidation(cells: int, tvs=(0.05, 0.197, 0.848), dim: int = 2, model: str
     return out
 
 
+def seepage_to_hydrostatic(cells: int = 10, gravity_as_body_force: bool = False, tv: float = 2.5) -> np.ndarray:
+    """The column unloaded, from p = 0, its top drained at p = 0, under g_n: the water flows until
+    Darcy's flux vanishes, where grad p = rho_w g, i.e. p = rho_w g_n (H - z) (at Tv = 2.5 the
+    consolidation's slowest mode is down to exp(-pi^2 Tv / 4) = 0.2 %). Gravity given as `gravity`
+    or, `gravity_as_body_force`, as the scene's `body_force` (Darcy's law takes the step's whole body
+    acceleration). Damped (local, 0.5): the skeleton settles under its own weight. Returns
+    (p_p - rho_w g_n (H - z_p)) / (rho_w g_n H) for each particle."""
+    end = tv * HEIGHT**2 / consolidation_coefficient()
+    scene = column_scene(cells, end=end, damping=0.5)
+    scene["loads"] = []
+    del scene["bodies"][0]["initial_pore_pressure"]
+    weight = [0.0] * (scene["dimension"] - 1) + [-G_N]
+    scene["body_force" if gravity_as_body_force else "gravity"] = weight
+    sim = run(scene, end)
+    rho_g = FLUID["density"] * G_N
+    depth = HEIGHT - sim.particles.x[:, scene["dimension"] - 1]
+    return (sim.particles.extra["pore_pressure"] - rho_g * depth) / (rho_g * HEIGHT)
+
+
 def undrained(fluid: dict, end: float, cells: int = 10, skeleton: dict | None = None,
               oedometric_modulus: float = SKELETON["youngs_modulus"]) -> tuple[float, float, float]:
     """(the water's share of the total vertical stress p / (p - sigma'_zz), the mean p / q, both over

@@ -3,6 +3,7 @@ and the undrained response (the cases are in pore_fluid_cases.py; errors and tim
 docs/benchmarks.md, "Saturated soil", from benchmarks/two_phase.py)."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import pore_fluid_cases as pc
@@ -58,8 +59,7 @@ class TestAxisymmetric:
     rings move out (v_r 0.07 m/s) and the isochrone is 6 q off at Tv = 0.848. Asserted: the
     plane column's U and isochrone error to 1e-9 (round-off: measured 2e-15; the rings' volumes
     change every sum's terms), and Terzaghi's U to the plane case's 0.01 (measured +0.0030 at
-    Tv = 0.197, +0.0025 at 0.848). (Swelling, not a loaded column: a `traction` load's shares
-    are the plane areas in an axisymmetric scene, not the rings'.)"""
+    Tv = 0.197, +0.0025 at 0.848)."""
 
     def test_an_axisymmetric_column_swells_as_the_plane_one(self):
         plane = pc.consolidation(10, tvs=(0.197, 0.848), swelling=True, across=3)
@@ -68,6 +68,21 @@ class TestAxisymmetric:
             assert abs(ring[tv][0] - pc.terzaghi_degree(tv)) < 0.01, f"Tv = {tv}: U = {ring[tv][0]:.4f}"
             assert ring[tv][0] == pytest.approx(plane[tv][0], abs=1e-9)
             assert ring[tv][1] == pytest.approx(plane[tv][1], abs=1e-9)
+
+
+class TestSeepage:
+    """The unloaded column from p = 0, drained at its top, comes to rest hydrostatic,
+    p = rho_w g_n (H - z), where Darcy's flux vanishes. Asserted: within rho_w g h of it (the
+    drained face's known first-order error, h / H = 0.1 of rho_w g H on 10 cells; measured 0.054),
+    and gravity given as the scene's `body_force` gives the same pressures (Darcy's law takes the
+    step's body acceleration; with gravity alone in it, the body-force column stays near p = 0:
+    0.97 of rho_w g H off)."""
+
+    def test_the_water_comes_to_rest_hydrostatic_under_gravity_or_an_equal_body_force(self):
+        under_gravity = pc.seepage_to_hydrostatic()
+        under_body_force = pc.seepage_to_hydrostatic(gravity_as_body_force=True)
+        assert np.abs(under_gravity).max() < 0.1
+        assert np.abs(under_body_force - under_gravity).max() < 1e-9
 
 
 class TestUndrained:
