@@ -1,12 +1,13 @@
-"""A fused-backend switch on and off, side by side in one process: the step with the stress
-formed in P2G (`forms_stress`) or updated in G2P (`updates_stress`) against the same scene with
-the separate stress pass, or with the force folded into the momentum (`folds_force`) against
-f_I formed apart, taking turns (so a shared machine's load hits both alike).
+"""A choice of the fused plan (solver/step/fused.py CHOICES) on and off, side by side in one
+process: the step with the stress formed in P2G (`forms_stress`) or updated in G2P
+(`updates_stress`) against the same scene with the separate stress pass, or with the force
+folded into the momentum (`fold`) against f_I formed apart, taking turns (so a shared machine's
+load hits both alike).
 
     python benchmarks/fused_switch_ab.py                                  # updates_stress, FLIP block
-    python benchmarks/fused_switch_ab.py --switch _splits_kinematics --dims 2   # MUSL's vectorised pass
+    python benchmarks/fused_switch_ab.py --switch g2p_kinematics --dims 2   # MUSL's vectorised pass
     python benchmarks/fused_switch_ab.py --switch forms_stress --block mls --dims 2 --threads 1 2
-    python benchmarks/fused_switch_ab.py --switch _uses_lanes --block mls --dims 3   # 3D MLS in four lanes
+    python benchmarks/fused_switch_ab.py --switch lanes --block mls --dims 3   # 3D MLS in four lanes
 
 The blocks are benchmarks/throughput.py's: "flip" its part-2 block (linear elastic, linear hats,
 MUSL, FLIP 0.99), "apic" / "mls" its side-by-side block (neo-Hookean, quadratic B-splines, USL),
@@ -14,9 +15,9 @@ MUSL, FLIP 0.99), "apic" / "mls" its side-by-side block (neo-Hookean, quadratic 
 second; after a warm-up, --rounds rounds of --steps steps run on each in turn. The table gives
 ns per particle-step with the switch on and off (median and best of the rounds) and off / on
 (above 1: the switch makes the step faster). Both copies end in the same state to round-off
-(tests/unit/test_fused.py checks it: folds_force joins the force's sum to the momentum's, and
+(tests/unit/test_fused.py checks it: `fold` joins the force's sum to the momentum's, and
 with FMA contraction, the default, a fused kernel may fuse a multiply and an add that a
-material's own pass does not; the other switches keep the bits with MPM_FMA=0, and _uses_lanes
+material's own pass does not; the other switches keep the bits with MPM_FMA=0, and `lanes`
 with contraction too); this script checks the positions to 1e-12. A switch that is off for a
 block (updates_stress on the 2D FLIP block, whose KINEMATICS pass is the vectorised
 `g2p_kinematics`, without the update) gets a row that says so.
@@ -38,6 +39,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 from throughput import DT, MLS_DT, MPM88_DT, block_scene, mls_block_scene, mpm88_scene  # noqa: E402
 from solver.scene import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
+from solver.step.fused import CHOICES  # noqa: E402
 
 
 def scene_of(block: str, dim: int, threads: int) -> tuple[dict, float]:
@@ -56,9 +58,9 @@ def compare(switch: str, block: str, dim: int, threads: int, rounds: int, steps:
     scene, dt = scene_of(block, dim, threads)
     loaded = load_scene(scene)
     on, off = ExplicitMPM(loaded), ExplicitMPM(loaded)
-    if not getattr(on.phases, switch)():
+    if not on.phases.plan.makes(switch):
         return None
-    setattr(off.phases, switch, lambda: False)
+    off.phases.replan(without=(switch,))
     times = {"on": [], "off": []}
     for sim in (on, off):
         for _ in range(3):
@@ -80,8 +82,7 @@ def compare(switch: str, block: str, dim: int, threads: int, rounds: int, steps:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--switch", default="updates_stress",
-                        choices=("updates_stress", "forms_stress", "folds_force", "_splits_kinematics",
-                                 "_uses_lanes"))
+                        choices=CHOICES)
     parser.add_argument("--block", choices=("flip", "apic", "mls", "mpm88"), default="flip")
     parser.add_argument("--dims", nargs="+", type=int, default=[2, 3])
     parser.add_argument("--threads", nargs="+", type=int, default=[1, 2])

@@ -35,7 +35,7 @@ g{c} (weights and gradients on the S nodes), d{c} = (index - f{c}) h (node minus
 particle); per component v{c}, vp{c}, ...; per tensor entry s{a}{b}, l{a}{b}, ....
 
 With the compile-time `fold` (MLS, or APIC with quadratic B-splines, where nothing reads
-f_I: solver/step/fused.py `folds_force`), P2G scatters m_I and (mv)_I + dt f_I only: dt m_p
+f_I: the fused plan's `fold`, solver/step/fused.py), P2G scatters m_I and (mv)_I + dt f_I only: dt m_p
 b_p joins m_p v_p; with MLS dt V_p sigma_p D_p^-1 is taken from m_p C_p once per particle, as
 MLS-MPM codes do; with APIC the momentum and the force share a row's factors: the node's
 w (m v + m C (x_I - x_p)) - dt V sigma grad w is wx[i] qa + wdx[i] qb - gx[i] fg, with wdx

@@ -103,6 +103,7 @@ class ExplicitMPM:
         after the scene's own hooks."""
         self.added_hooks.append(hook)
         self.hooks.add(hook)
+        self.phases.hooks_changed()
 
     @property
     def fused(self) -> bool:

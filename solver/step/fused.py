@@ -14,6 +14,8 @@ for it: every pass shifts each particle's nodes into its body's field, and P2G s
 contact's presence and normals too; the hook (solver/contact.py) keeps the correction."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from solver import fused, kernels, near_one_log, shape
@@ -21,10 +23,41 @@ from solver.threads import first_of
 from solver.step.phases import Phases
 
 
+# What a plan may be told to leave out (`FusedPhases.replan(without=...)`: the tests and
+# benchmarks that hold a choice to the step without it).
+CHOICES = ("fold", "forms_stress", "updates_stress", "p2g_mls", "g2p_mls", "g2p_kinematics", "lanes")
+
+
+@dataclass(frozen=True)
+class FusedPlan:
+    """What the fused backend runs for its scene and hooks: chosen when the particles are placed
+    and again when a hook is added (`FusedPhases.replan`); a step only reads it. The kernels that
+    take flat views (p2g_mls, p2g_mls_lanes, g2p_mls, g2p_kinematics) fall back to p2g or g2p at a
+    call where an array they view is not C-contiguous."""
+    fold: bool             # P2G adds dt f_I into (mv)_I and forms no f_I (`_folds_force`)
+    forms_stress: bool     # P2G forms sigma_p; the stress pass waits until it is read (`_forms_stress`)
+    updates_stress: bool   # the pass that forms L_p updates sigma_p too (`_updates_stress`)
+    l_is_c: bool           # USL's MLS gather leaves L_p = C_p, copied only where read
+    p2g: str               # p2g_mls, p2g_mls_lanes, p2g_lanes or p2g
+    g2p_usl: str           # USL's pass: g2p_mls, g2p_lanes or g2p
+    g2p_kinematics: str    # MUSL's KINEMATICS pass: g2p_kinematics or g2p
+
+    def makes(self, choice: str) -> bool:
+        """Whether the plan makes `choice` (one of CHOICES)."""
+        kernels = {"p2g_mls": self.p2g.startswith("p2g_mls"), "g2p_mls": self.g2p_usl == "g2p_mls",
+                   "g2p_kinematics": self.g2p_kinematics == "g2p_kinematics",
+                   "lanes": "lanes" in self.p2g or "lanes" in self.g2p_usl}
+        return kernels[choice] if choice in kernels else getattr(self, choice)
+
+
 class FusedPhases(Phases):
     name = "fused"
     carries_conduction = True   # the conduction hook leaves its particle passes to these kernels
     carries_contact = True      # the contact hook leaves its stencil shift and normals to them
+
+    def __init__(self, sim):
+        super().__init__(sim)
+        self._without = frozenset()   # the plan's choices left out (`replan`), kept across placements
 
     @staticmethod
     def supports(scene) -> bool:
@@ -49,6 +82,7 @@ class FusedPhases(Phases):
         # APIC's (and MLS's) D_p^-1 per axis (unused without them); placed with the particles, after the grid
         self._d_inv = fused.inverse_d(apic_d, sim.frame.inv_h) if sim.affine is not None else sim.frame.inv_h
         self._place_arguments()
+        self.plan = self._plan(self._without)
 
     def _place_arguments(self) -> None:
         """What the kernels take that changes only when the grid or the particles are placed:
@@ -97,7 +131,47 @@ class FusedPhases(Phases):
     def weights(self) -> None:
         """Nothing to store: every kernel evaluates the weights it needs."""
 
-    def folds_force(self) -> bool:
+    # -- the plan ------------------------------------------------------------------------------
+
+    def replan(self, without: tuple[str, ...] = ()) -> None:
+        """Choose the plan again, leaving out the choices named in `without` (of CHOICES) from now
+        on: the step without them, which tests and benchmarks compare with the plan's own."""
+        unknown = set(without) - set(CHOICES)
+        assert not unknown, f"not a choice of the fused plan: {sorted(unknown)}"
+        self._without = frozenset(without)
+        self.plan = self._plan(self._without)
+
+    def hooks_changed(self) -> None:
+        self.plan = self._plan(self._without)
+
+    def _plan(self, without: frozenset) -> FusedPlan:
+        sim = self.sim
+        mls = sim.affine is not None and sim.affine.mls
+        fold = "fold" not in without and self._folds_force()
+        forms = "forms_stress" not in without and self._forms_stress()
+        lanes = "lanes" not in without and self._has_lanes
+        splits_kinematics = "g2p_kinematics" not in without and self._has_g2p_kinematics
+        updates = "updates_stress" not in without and self._updates_stress(splits_kinematics)
+        l_is_c = mls and forms
+        if fold and self._has_p2g_mls and "p2g_mls" not in without:
+            p2g = "p2g_mls_lanes" if lanes else "p2g_mls"
+        else:
+            p2g = "p2g_lanes" if fold and lanes and self._has_p2g_lanes else "p2g"
+        gathers_c = l_is_c and not updates
+        if gathers_c and self._has_g2p_mls and "g2p_mls" not in without:
+            usl = "g2p_mls"
+        else:
+            usl = "g2p_lanes" if gathers_c and lanes and self._has_g2p_lanes else "g2p"
+        kinematics = "g2p_kinematics" if splits_kinematics and not updates else "g2p"
+        return FusedPlan(fold, forms, updates, l_is_c, p2g, usl, kinematics)
+
+    def forms_stress(self) -> bool:
+        return self.plan.forms_stress
+
+    def updates_stress(self) -> bool:
+        return self.plan.updates_stress
+
+    def _folds_force(self) -> bool:
         """Whether P2G adds dt f_I into (mv)_I instead of forming f_I: with MLS (the force is
         w-weighted like the momentum) or APIC with quadratic B-splines, no FLIP blend and no hook
         that reads or adds to f_I or reads v_I^t (loads on nodes, damping, absorbing faces,
@@ -116,7 +190,7 @@ class FusedPhases(Phases):
         return (sim.affine is not None and (sim.affine.mls or quadratic) and sim.flip_ratio == 0.0
                 and not sim.hooks.after_forces and not sim.hooks.before_update)
 
-    def forms_stress(self) -> bool:
+    def _forms_stress(self) -> bool:
         """Whether P2G forms sigma_p itself, so that the stress pass can wait until something
         reads the stress (Particles.defer): for a scene of one material whose stress is a
         function of what P2G can read (a model with `stress_lines`: neo-Hookean from F_p, the
@@ -130,7 +204,7 @@ class FusedPhases(Phases):
         return (self._has_stress_lines and not self.sim.hooks.after_stress
                 and (self.sim.scene.time.dt is not None or not getattr(model, "stress_sets_wave_speed", False)))
 
-    def updates_stress(self) -> bool:
+    def _updates_stress(self, splits_kinematics: bool) -> bool:
         """Whether G2P updates sigma_p from the L_p it has just formed (USL's pass, MUSL's
         KINEMATICS pass), so that the stress pass has nothing left to do: for a scene of one
         material whose update is a function of L_p and the stress (a model with
@@ -140,13 +214,15 @@ class FusedPhases(Phases):
         (round-off with contraction, the default); the stress read and written
         in the pass that has L_p, instead of L_p and the stress read again by a pass of their own
         (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle). Not where MUSL's
-        KINEMATICS pass is the vectorised `g2p_kinematics` (`_splits_kinematics`), which has no
+        KINEMATICS pass is the vectorised `g2p_kinematics` (`splits_kinematics`), which has no
         update: that pass and the material's own were 10 % faster a step on the 2D FLIP block than
         the scalar pass with the update (docs/benchmarks.md, issue 18, twentieth part)."""
         hooks = self.sim.hooks
         musl = self.sim.scene.method.scheme == "musl"
         return (self._has_update_lines and not hooks.after_kinematics and not hooks.after_stress
-                and (musl or not hooks.after_g2p) and not (musl and self._splits_kinematics()))
+                and (musl or not hooks.after_g2p) and not (musl and splits_kinematics))
+
+    # -- the transfers ----------------------------------------------------------------------
 
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
@@ -154,17 +230,18 @@ class FusedPhases(Phases):
         # formed while it is a function of the state (Particles.derived), even when a frame or a
         # checkpoint has read it since: the bits do not depend on what was read; an initial
         # stress or one assigned is the state, and is read
-        fold, inline = self.folds_force(), p.derived("stress")
+        fold, inline = self.plan.fold, p.derived("stress")
         # (L_p put off is C_p: `_g2p`)
         L = self._affine_matrix if p.pending("L") else p.stored("L")
-        if fold and self._vectorises_mls_p2g(L, acc):
+        kernel = self.plan.p2g
+        if kernel.startswith("p2g_mls") and _contiguous(p.x, p.v, self._affine_matrix, p.F, L, acc):
             variant = self._p2g_mls_variants[inline, acc.shape[0] == 1]   # (one row: a shared acceleration)
-            kernel, targets = ((self._kernels.p2g_mls_lanes, (self._lanes()[0],)) if self._uses_lanes() else
-                               (self._kernels.p2g_mls, (c.mass, c.momentum)))
-            kernel(variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"), *_flat(p.F, L),
-                   p.volume0, self._stress_parameters, *_flat(acc), *self._frame, self._d_inv, g.mass, g.momentum,
-                   *targets, bad, self.dt)
-        elif fold and self._uses_lanes() and self._has_p2g_lanes:
+            targets = (self._lanes()[0],) if kernel == "p2g_mls_lanes" else (c.mass, c.momentum)
+            getattr(self._kernels, kernel)(
+                variant, *_flat(p.x, p.v, self._affine_matrix), p.mass, p.volume, p.stored("stress"), *_flat(p.F, L),
+                p.volume0, self._stress_parameters, *_flat(acc), *self._frame, self._d_inv, g.mass, g.momentum,
+                *targets, bad, self.dt)
+        elif kernel == "p2g_lanes":
             self._kernels.p2g_lanes(self._p2g_variants[fold, inline], p.x, p.v, self._affine_matrix, p.mass, p.volume,
                                     p.stored("stress"), p.F, L, p.volume0, self._stress_parameters, acc, self._frame,
                                     self._d_inv, g.mass, g.momentum, self._lanes()[0], bad, self.dt)
@@ -177,14 +254,6 @@ class FusedPhases(Phases):
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
 
-    def _uses_lanes(self) -> bool:
-        """Whether MLS in 3D runs as `p2g_lanes` (its folded P2G) and `g2p_lanes` (its USL pass, C_p as
-        L_p, no stress update), and in 2D its folded P2G as `p2g_mls_lanes`, a node's values in four
-        lanes of one vector (solver/lanes.py, solver/fused_template.py `_p2g_lanes`; the same bits as
-        `p2g`, `p2g_mls` and `g2p`): where the module has them (no conduction or contact) and the
-        scene's transfer is MLS with quadratic B-splines and no FLIP blend (`g2p_lanes` has none)."""
-        return self._has_lanes
-
     def _lanes(self) -> tuple[np.ndarray, np.ndarray]:
         """The (threads, n_nodes, 4) rows `p2g_lanes` adds into and the (n_nodes, 4) velocities
         `g2p_lanes` reads, (re)allocated when the grid is placed anew (their contents are
@@ -195,19 +264,11 @@ class FusedPhases(Phases):
             self._velocity_lanes = np.empty((n, 4))
         return self._node_lanes, self._velocity_lanes
 
-    def _vectorises_mls_p2g(self, *more: np.ndarray) -> bool:
-        """Whether MLS's folded P2G runs as `p2g_mls`, its work per particle vectorised
-        (solver/fused_template.py `_p2g_mls`; the same bits as `p2g`): where the module has it,
-        with quadratic B-splines, and the arrays it takes flat views of (`more`: L_p and the
-        body acceleration of the step) are C-contiguous."""
-        p = self.sim.particles
-        return self._has_p2g_mls and all(a.flags.c_contiguous for a in (p.x, p.v, self._affine_matrix, p.F, *more))
-
     def _integrate(self, dt: float) -> None:
         """After a folded P2G, v~_I^{t+dt} = (mv)_I / m_I = v_I^t, dt f_I being in (mv)_I already: the
         same bits as integrate_nodes with f_I = 0 ((mv)_I, summed from +0, is never -0), without
         its second division (2D block, 226^2 nodes: 307 -> 179 us at one thread, 305 -> 131 at two)."""
-        if self.folds_force():
+        if self.plan.fold:
             g = self.sim.grid
             kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
             np.copyto(g.v_new, g.v_old)
@@ -231,19 +292,20 @@ class FusedPhases(Phases):
         self._after_kinematics(dt, v_grid)
 
     def _g2p(self, dt: float, mode: int) -> None:
-        sim = self.sim
+        sim, plan = self.sim, self.plan
         p, g, bad = sim.particles, sim.grid, self._bad
         # MLS's USL gather: L_p = B_p D_p^-1 is C_p to the bit, copied only when something reads it
         # (where the stress is formed in P2G, no material reads it at each step)
-        l_is_c = mode == fused.USL and sim.affine is not None and sim.affine.mls and self.forms_stress()
-        updates = mode != fused.REMAP and self.updates_stress()
-        if l_is_c and not updates and self._splits_mls_g2p():
+        l_is_c = mode == fused.USL and plan.l_is_c
+        updates = mode != fused.REMAP and plan.updates_stress
+        kernel = {fused.USL: plan.g2p_usl, fused.KINEMATICS: plan.g2p_kinematics}.get(mode, "g2p")
+        if kernel == "g2p_mls" and _contiguous(p.x, p.v, self._affine_matrix, p.F, g.v_new):
             self._kernels.g2p_mls(*_flat(p.x, p.v, self._affine_matrix, p.F, g.v_new), p.volume, p.volume0,
                                   *self._frame, self._d_inv, dt, sim.copies.momentum.shape[0] + 1, bad)
-        elif l_is_c and not updates and self._uses_lanes() and self._has_g2p_lanes:
+        elif kernel == "g2p_lanes":
             self._kernels.g2p_lanes(p.x, p.v, self._affine_matrix, p.F, p.volume, p.volume0, self._frame, g.v_new,
                                     self._lanes()[1], dt, self._d_inv, sim.threads, bad)
-        elif mode == fused.KINEMATICS and not updates and self._splits_kinematics():
+        elif kernel == "g2p_kinematics" and _contiguous(p.x, sim.rate, p.stored("L"), p.F, g.v_new):
             self._kernels.g2p_kinematics(self._support, *_flat(p.x, sim.rate, p.stored("L"), p.F, g.v_new), p.volume,
                                          p.volume0, *self._frame, dt, sim.copies.momentum.shape[0] + 1, bad)
         else:
@@ -251,24 +313,6 @@ class FusedPhases(Phases):
         if l_is_c:
             p.defer("L", lambda: np.copyto(p.stored("L"), self._affine_matrix))
         sim.check_inversion(first_of(bad))
-
-    def _splits_mls_g2p(self) -> bool:
-        """Whether MLS's USL pass (C_p as L_p, no stress update) runs as `g2p_mls`, the gather
-        LLVM vectorises (solver/fused_template.py `_g2p_mls`; the same bits as `g2p`): where the
-        module has it and the arrays are C-contiguous (it takes flat views of them)."""
-        p = self.sim.particles
-        return self._has_g2p_mls and all(a.flags.c_contiguous for a in (p.x, p.v, self._affine_matrix, p.F,
-                                                                         self.sim.grid.v_new))
-
-    def _splits_kinematics(self) -> bool:
-        """Whether MUSL's KINEMATICS pass runs as `g2p_kinematics`, the loop LLVM vectorises
-        (solver/fused_template.py `_g2p_kinematics`; the same bits as `g2p` without `updates`): where
-        the module has it (2D, no conduction or contact), under MUSL without MLS, and the arrays it
-        takes flat views of are C-contiguous."""
-        sim = self.sim
-        p = sim.particles
-        return self._has_g2p_kinematics and all(a.flags.c_contiguous for a in (p.x, sim.rate, p.stored("L"), p.F,
-                                                                                sim.grid.v_new))
 
     def _g2p_kernel(self, dt: float, mode: int, l_is_c: bool, updates: bool) -> None:
         sim = self.sim
@@ -348,3 +392,8 @@ def _material_lines(sim, model, kind: str) -> tuple | None:
 def _flat(*arrays: np.ndarray) -> tuple:
     """Views of C-contiguous arrays as one row (no copy: the kernel writes through them)."""
     return tuple(a.reshape(-1) for a in arrays)
+
+
+def _contiguous(*arrays: np.ndarray) -> bool:
+    """Whether a kernel may take flat views of the arrays (`_flat`)."""
+    return all(a.flags.c_contiguous for a in arrays)

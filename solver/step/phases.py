@@ -141,6 +141,9 @@ class Phases:
         for material, sl in sim.materials:
             material.update_stress(sim.particles, sl, dt)
 
+    def hooks_changed(self) -> None:
+        """A hook was added (ExplicitMPM.add_hook): what the backend decided from the hooks is decided again."""
+
     def forms_stress(self) -> bool:
         """Whether the next P2G forms sigma_p from F_p, so that the stress update can wait
         until something reads the stress (solver/step/fused.py)."""

@@ -164,8 +164,8 @@ def test_fused_step_folds_the_force_into_the_momentum_only_where_nothing_reads_i
     MLS, and APIC with quadratic B-splines, without a FLIP blend or a hook on f_I or v_I^t only."""
     scene = load_scene({**(SCENE_2D if dimension == 2 else SCENE_3D), **extra, "method": method})
     folded, unfolded = ExplicitMPM(scene), ExplicitMPM(scene)
-    assert folded.phases.folds_force() is folds
-    unfolded.phases.folds_force = lambda: False
+    assert folded.phases.plan.fold is folds
+    unfolded.phases.replan(without=("fold",))
     for _ in range(STEPS):
         folded.advance(2e-4)
         unfolded.advance(2e-4)
@@ -176,6 +176,24 @@ def test_fused_step_folds_the_force_into_the_momentum_only_where_nothing_reads_i
     if method["transfer"] != "flip":
         assert relative_difference(a.extra["affine"], b.extra["affine"]) <= TOLERANCE
     assert folded.boundary_work == pytest.approx(unfolded.boundary_work, rel=1e-9, abs=1e-12)
+
+
+def test_a_hook_added_after_placement_is_in_the_plan():
+    """The plan is chosen when the particles are placed and again when a hook is added: a hook that
+    reads f_I (after_forces) unfolds the force, and a choice left out stays out when the particles
+    are placed again."""
+    sim = ExplicitMPM(load_scene(neo_hookean_mls(SCENE_2D)))
+    assert sim.phases.plan.fold and sim.phases.plan.p2g == "p2g_mls_lanes"
+
+    class ReadsTheForce:
+        def after_forces(self, sim):
+            pass
+    sim.add_hook(ReadsTheForce())
+    assert not sim.phases.plan.fold and sim.phases.plan.p2g == "p2g"
+    other = ExplicitMPM(load_scene(neo_hookean_mls(SCENE_2D)))
+    other.phases.replan(without=("lanes",))
+    other.place()
+    assert other.phases.plan.p2g == "p2g_mls"
 
 
 def _lone_particle_step(inside: float, fold: bool) -> tuple[np.ndarray, np.ndarray, float]:
@@ -191,8 +209,8 @@ def _lone_particle_step(inside: float, fold: bool) -> tuple[np.ndarray, np.ndarr
         "method": QUADRATIC_APIC, "time": {"end": 1.0, "dt": 1e-4}})
     sim = ExplicitMPM(scene)
     if not fold:
-        sim.phases.folds_force = lambda: False
-    assert sim.phases.folds_force() is fold and sim.particles.count == 1
+        sim.phases.replan(without=("fold",))
+    assert sim.phases.plan.fold is fold and sim.particles.count == 1
     p = sim.particles
     p.x[0] = [(5.5 - inside) * h, 0.55]
     p.stress[0] = [[1e4, 2e3, 0.0], [2e3, -5e3, 0.0], [0.0, 0.0, 1.5e3]]
@@ -425,11 +443,11 @@ LINEAR_FLUID = {"model": "fluid", "density": 1000, "bulk_modulus": 1e4, "gamma":
 
 
 def stepped_with_and_without(scene, switch: str) -> tuple:
-    """Two simulations of the scene after STEPS steps: the fused backend's `switch` (a method of
-    FusedPhases that is true for the scene) as it is, and turned off."""
+    """Two simulations of the scene after STEPS steps: the fused plan with `switch` (a choice the plan
+    makes for the scene, solver/step/fused.py CHOICES) and the plan without it."""
     on, off = ExplicitMPM(scene), ExplicitMPM(scene)
-    assert getattr(on.phases, switch)()
-    setattr(off.phases, switch, lambda *arrays: False)
+    assert on.phases.plan.makes(switch)
+    off.phases.replan(without=(switch,))
     for _ in range(STEPS):
         on.advance(2e-4)
         off.advance(2e-4)
@@ -634,7 +652,7 @@ def test_the_vectorised_mls_pass_gives_the_one_pass_kernel_bit_for_bit(material,
     scene = copy.deepcopy(SCENE_2D)
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
-    split, one_pass = stepped_with_and_without(scene, "_splits_mls_g2p")
+    split, one_pass = stepped_with_and_without(scene, "g2p_mls")
     assert_one_more_step_the_same_bits(split, one_pass, "g2p_mls")
 
 
@@ -649,7 +667,7 @@ def test_the_vectorised_mls_pass_runs_only_for_mls_under_usl_in_2d(change):
     formed in P2G) nor update the stress, in 2D: elsewhere the scene keeps `g2p`."""
     base = neo_hookean_mls(SCENE_2D)
     sim = ExplicitMPM(load_scene(base))
-    assert sim.phases._splits_mls_g2p()
+    assert sim.phases.plan.g2p_usl == "g2p_mls"
     other = neo_hookean_mls(SCENE_3D) if change.get("dimension") == 3 else {**base, **change}
     sim = ExplicitMPM(load_scene(other))
     calls = _counted(sim, "g2p_mls") if hasattr(sim.phases._kernels, "g2p_mls") else []
@@ -665,19 +683,19 @@ def test_the_vectorised_mls_pass_names_the_first_inverted_particle_as_the_one_pa
     F_p turned over here reaches G2P finite."""
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
     scene["materials"]["m"] = LINEAR_FLUID
-    assert_the_same_inverted_particle_named(scene, "_splits_mls_g2p")
+    assert_the_same_inverted_particle_named(scene, "g2p_mls")
 
 
 def assert_the_same_inverted_particle_named(scene: dict, switch: str) -> None:
-    """With the fused backend's `switch` on and off, F_p turned over for three particles: the step
+    """With the fused plan's `switch` and without it, F_p turned over for three particles: the step
     fails naming the first of them, the same particle both ways."""
     named = []
     for split in (True, False):
         sim = ExplicitMPM(load_scene(scene))
         if not split:
-            setattr(sim.phases, switch, lambda: False)
+            sim.phases.replan(without=(switch,))
         sim.advance(2e-4)
-        assert getattr(sim.phases, switch)() is split
+        assert sim.phases.plan.makes(switch) is split
         n = sim.particles.count
         for p in (n - 4, n - 2, n // 3):   # in the last block, and one earlier (the first block with two threads)
             sim.particles.F[p] = np.diag([-1.0] + [1.0] * (sim.scene.dimension - 1))
@@ -707,7 +725,7 @@ def test_the_vectorised_mls_p2g_gives_the_scalar_kernel_bit_for_bit(material, th
     scene = copy.deepcopy(SCENE_2D)
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
-    vectorised, scalar = stepped_with_and_without(scene, "_vectorises_mls_p2g")
+    vectorised, scalar = stepped_with_and_without(scene, "p2g_mls")
     assert vectorised.phases._p2g_mls_variants[True, True][2].ndim - 1 == near_one_log.matches_libm()
     calls = _counted(vectorised, "p2g_mls")
     vectorised.advance(2e-4)
@@ -727,7 +745,8 @@ def test_the_vectorised_mls_p2g_reads_an_assigned_stress_as_the_scalar_kernel_do
     sims = []
     for vectorised in (True, False):
         sim = ExplicitMPM(load_scene(scene))
-        sim.phases._vectorises_mls_p2g = lambda *arrays, on=vectorised: on and sim.phases._has_p2g_mls
+        if not vectorised:
+            sim.phases.replan(without=("p2g_mls",))
         sim.advance(2e-4)
         sim.particles.stress = sim.particles.stress * 1.5
         assert not sim.particles.derived("stress")
@@ -769,25 +788,26 @@ def test_the_vectorised_mls_p2g_names_the_first_particle_outside_the_grid_as_the
     without_lanes(monkeypatch)
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
     scene["materials"]["m"] = NEO_HOOKEAN
-    assert_the_same_particle_named_outside_the_grid(scene, "_vectorises_mls_p2g", "p2g_mls", lambda n: (
+    assert_the_same_particle_named_outside_the_grid(scene, "p2g_mls", "p2g_mls", lambda n: (
         (n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])))
 
 
 def without_lanes(monkeypatch) -> None:
     """2D's folded MLS P2G as `p2g_mls`, not `p2g_mls_lanes` (the tests of p2g_mls compare it with
     `p2g`; those of the lanes compare the lanes with it)."""
-    monkeypatch.setattr(FusedPhases, "_uses_lanes", lambda self: False)
+    plan = FusedPhases._plan
+    monkeypatch.setattr(FusedPhases, "_plan", lambda self, without: plan(self, without | {"lanes"}))
 
 
 def assert_the_same_particle_named_outside_the_grid(scene: dict, switch: str, kernel: str, moved) -> None:
-    """With the fused backend's `switch` on and off, the particles `moved(count)` names put where it
+    """With the fused plan's `switch` and without it, the particles `moved(count)` names put where it
     says (index, position): the step fails naming the first of them, the same particle both ways,
     and `kernel` runs only with the switch on."""
     named = []
     for on in (True, False):
         sim = ExplicitMPM(load_scene(scene))
         if not on:
-            setattr(sim.phases, switch, lambda *arrays: False)
+            sim.phases.replan(without=(switch,))
         sim.advance(2e-4)
         places = moved(sim.particles.count)
         for p, x in places:
@@ -817,7 +837,7 @@ def test_the_vectorised_kinematics_pass_gives_the_scalar_kernel_bit_for_bit(mate
     if material is not None:
         scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS[method], "parallel": {"threads": threads}})
-    split, one_pass = stepped_with_and_without(scene, "_splits_kinematics")
+    split, one_pass = stepped_with_and_without(scene, "g2p_kinematics")
     assert not split.phases.updates_stress() and one_pass.phases.updates_stress() is (material is None)
     assert_one_more_step_the_same_bits(split, one_pass, "g2p_kinematics")
 
@@ -832,7 +852,7 @@ def test_the_vectorised_kinematics_pass_runs_only_under_musl_without_mls_in_2d(c
     `g2p`, and linear elasticity its stress update in G2P."""
     base = {**copy.deepcopy(SCENE_2D), "method": METHODS["musl-linear-flip"]}
     sim = ExplicitMPM(load_scene(base))
-    assert sim.phases._splits_kinematics() and not sim.phases.updates_stress()
+    assert sim.phases.plan.g2p_kinematics == "g2p_kinematics" and not sim.phases.updates_stress()
     other = {**copy.deepcopy(SCENE_3D), "method": METHODS["musl-linear-flip"]} if "dimension" in change \
         else {**base, **change}
     sim = ExplicitMPM(load_scene(other))
@@ -846,7 +866,7 @@ def test_the_vectorised_kinematics_pass_names_the_first_inverted_particle_as_the
     """The vectorised loop counts the particles whose J = det F is not positive and looks for the
     first one afterwards: the step fails naming the particle `g2p` names."""
     scene = {**copy.deepcopy(SCENE_2D), "method": METHODS["musl-linear-flip"], "parallel": {"threads": threads}}
-    assert_the_same_inverted_particle_named(scene, "_splits_kinematics")
+    assert_the_same_inverted_particle_named(scene, "g2p_kinematics")
 
 
 # -- MLS in 3D, a node's values in four lanes ------------------------------------------------
@@ -869,7 +889,7 @@ def test_the_lanes_kernels_give_the_scalar_kernels_bit_for_bit(material, threads
     if material is not None:
         scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
-    lanes, scalar = stepped_with_and_without(scene, "_uses_lanes")
+    lanes, scalar = stepped_with_and_without(scene, "lanes")
     gathered = _counted(lanes, "g2p_lanes")
     assert_one_more_step_the_same_bits(lanes, scalar, "p2g_lanes")
     assert len(gathered) == int(gathers)
@@ -909,8 +929,8 @@ def test_the_lanes_kernels_name_the_first_failing_particle_as_the_scalar_kernels
     F_p turned over reaches G2P finite)."""
     scene = {**copy.deepcopy(SCENE_3D), "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}}
     scene["materials"]["m"] = LINEAR_FLUID
-    assert_the_same_inverted_particle_named(scene, "_uses_lanes")
-    assert_the_same_particle_named_outside_the_grid(scene, "_uses_lanes", "p2g_lanes", lambda n: (
+    assert_the_same_inverted_particle_named(scene, "lanes")
+    assert_the_same_particle_named_outside_the_grid(scene, "lanes", "p2g_lanes", lambda n: (
         (n - 3, [2.0, 0.2, 0.2]), (n - 1, [float("nan"), 0.2, 0.2]), (n // 3, [0.5, -1.0, 0.2])))
 
 
@@ -927,7 +947,7 @@ def test_the_2d_lanes_scatter_gives_the_vectorised_mls_p2g_bit_for_bit(material,
     scene = copy.deepcopy(SCENE_2D)
     scene["materials"]["m"] = material
     scene = load_scene({**scene, "method": METHODS["usl-quadratic-mls"], "parallel": {"threads": threads}})
-    lanes, plain = stepped_with_and_without(scene, "_uses_lanes")
+    lanes, plain = stepped_with_and_without(scene, "lanes")
     scattered = _counted(plain, "p2g_mls")
     assert_one_more_step_the_same_bits(lanes, plain, "p2g_mls_lanes")
     assert len(scattered) == 1
@@ -949,12 +969,13 @@ def test_the_2d_lanes_scatter_runs_where_the_vectorised_mls_p2g_does(change, run
     assert len(calls) == int(runs)
 
 
-def test_a_2d_scene_whose_arrays_p2g_mls_cannot_take_runs_p2g_with_the_lanes_on():
-    """Where `p2g_mls` cannot run (an array it takes a flat view of is not C-contiguous:
-    `_vectorises_mls_p2g`), 2D's folded P2G is `p2g`: a 2D module has no `p2g_lanes`."""
+def test_a_2d_plan_without_p2g_mls_runs_p2g_with_the_lanes_on():
+    """Where the plan leaves `p2g_mls` out (as a call does whose arrays it cannot take a flat view
+    of), 2D's folded P2G is `p2g`: a 2D module has no `p2g_lanes`."""
     sim = ExplicitMPM(load_scene(neo_hookean_mls(SCENE_2D)))
-    sim.phases._vectorises_mls_p2g = lambda *arrays: False
-    assert sim.phases._uses_lanes() and not hasattr(sim.phases._kernels, "p2g_lanes")
+    sim.phases.replan(without=("p2g_mls",))
+    assert sim.phases._has_lanes and not hasattr(sim.phases._kernels, "p2g_lanes")
+    assert sim.phases.plan.p2g == "p2g" and sim.phases.plan.fold
     calls = _counted(sim, "p2g")
     sim.advance(2e-4)
     assert len(calls) == 1
@@ -963,5 +984,5 @@ def test_a_2d_scene_whose_arrays_p2g_mls_cannot_take_runs_p2g_with_the_lanes_on(
 @pytest.mark.parametrize("threads", [1, 2])
 def test_the_2d_lanes_scatter_names_the_first_particle_outside_the_grid_as_p2g_mls(threads):
     scene = {**neo_hookean_mls(SCENE_2D), "parallel": {"threads": threads}}
-    assert_the_same_particle_named_outside_the_grid(scene, "_uses_lanes", "p2g_mls_lanes", lambda n: (
+    assert_the_same_particle_named_outside_the_grid(scene, "lanes", "p2g_mls_lanes", lambda n: (
         (n - 3, [2.0, 0.2]), (n - 1, [float("nan"), 0.2]), (n // 3 + 70, [0.5, -1.0])))
