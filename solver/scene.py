@@ -48,9 +48,6 @@ from solver.errors import SolverError
 from contextvars import ContextVar
 
 from solver.expressions import ExpressionError, compile_expression, definition_problems
-from solver.materials.ideal_gas import IdealGas
-from solver.materials.johnson_cook import JohnsonCook
-from solver.materials.rigid import Rigid
 from solver.parallel.slabs import scene_problems as slab_problems
 from solver.units import Units
 from solver.schema import (
@@ -481,6 +478,11 @@ class Body(SceneModel):
     velocity: list[TimeValue | None] | None = None  # rigid bodies only; None: at rest; a null component: free axis
     initial_stress: GeostaticStress | None = None   # None: stress-free
     initial_pore_pressure: InitialPorePressure | None = None   # saturated bodies; None: 0
+
+
+# The keys of Body that give a body its initial state, for the materials that declare them
+# (BaseMaterial.body_state_keys: ideal_gas).
+BODY_STATE_KEYS = ("initial_density", "initial_pressure")
 
 
 # where a velocity condition holds: the geometries defined by numbers alone (no files)
@@ -1132,7 +1134,7 @@ def _tool_problems(scene: Scene, length_ok, expressions_ok) -> list[tuple[str, s
     dimension, and materials with a shear modulus for the stiffness to be a multiple of."""
     problems: list[tuple[str, str]] = []
     series = {body.name.replace("/", "_"): f"bodies[{b}]" for b, body in enumerate(scene.bodies)
-              if isinstance(scene.materials.get(body.material), Rigid)}   # their reaction_<body>_<axis>
+              if _rigid(scene, body)}   # their reaction_<body>_<axis>
     for i, tool in enumerate(scene.tools):
         path = f"tools[{i}]"
         key = tool.name.replace("/", "_")
@@ -1147,7 +1149,7 @@ def _tool_problems(scene: Scene, length_ok, expressions_ok) -> list[tuple[str, s
             problems.extend(_revolution_problems(path, tool))
     for b, body in enumerate(scene.bodies if scene.tools else ()):
         material = scene.materials.get(body.material)
-        if material is not None and not isinstance(material, Rigid) and not hasattr(material, "shear_modulus"):
+        if material is not None and not material.rigid and not hasattr(material, "shear_modulus"):
             problems.append(("tools", f"a tool's stiffness is a multiple of the shear modulus of the material it "
                                       f"touches, and bodies[{b}] ({body.name!r}) is of material {body.material!r} "
                                       f"(model {material.model!r}), which has none"))
@@ -1200,7 +1202,7 @@ def _load_problems(scene: Scene, names: dict[str, int], length_ok, expressions_o
         if body is None:
             defined = ", ".join(repr(name) for name in names)
             problems.append((f"{path}.body", f"unknown body {load.body!r}; defined: {defined}"))
-        elif isinstance(scene.materials.get(scene.bodies[body].material), Rigid):
+        elif _rigid(scene, scene.bodies[body]):
             problems.append((f"{path}.body", f"{load.body!r} is a rigid body: it moves as prescribed, a load "
                                              "does not act on it"))
         elif load.type == "traction" and scene.bodies[body].geometry.type == "points":
@@ -1245,30 +1247,39 @@ def _geometry_problems(path: str, spec: Any, dim: int, problems: list[tuple[str,
     return ok
 
 
+def _rigid(scene: Scene, body: Body) -> bool:
+    """Whether `body` is of a rigid material (not when its material is unknown: reported apart)."""
+    material = scene.materials.get(body.material)
+    return material is not None and material.rigid
+
+
 def _body_material_problems(path: str, body: Body, material: Any, length_ok) -> list[tuple[str, str]]:
-    problems = material.body_problems(path, body)
-    if isinstance(material, IdealGas):
-        for name in ("initial_density", "initial_pressure"):
-            if getattr(body, name) is None:
-                problems.append((f"{path}.{name}", "required for an 'ideal_gas' material"))
-    else:
-        for name in ("initial_density", "initial_pressure"):
-            if getattr(body, name) is not None:
-                problems.append((f"{path}.{name}", "only used with an 'ideal_gas' material"))
-    if (isinstance(material, JohnsonCook) and material.m is None and body.initial_temperature is not None
-            and body.initial_temperature != material.room_temperature):
-        problems.append((f"materials.{body.material}.m", f"required: {path} starts at initial_temperature = "
-                                                         f"{fmt(body.initial_temperature)}, not room_temperature, "
-                                                         "so the thermal softening exponent is used"))
-    if isinstance(material, Rigid) and body.initial_velocity is not None:
+    problems = material.body_problems(path, body) + _body_state_problems(path, body, material)
+    problems += material.temperature_problems(path, body)
+    if material.rigid and body.initial_velocity is not None:
         problems.append((f"{path}.initial_velocity", "a 'rigid' body moves with its prescribed velocity; "
                                                      "use velocity instead"))
     if body.velocity is not None:
-        if not isinstance(material, Rigid):
+        if not material.rigid:
             problems.append((f"{path}.velocity", "a prescribed velocity needs a 'rigid' material; "
                                                  "use initial_velocity for deformable bodies"))
         else:
             length_ok(f"{path}.velocity", body.velocity)
+    return problems
+
+
+def _body_state_problems(path: str, body: Body, material: Any) -> list[tuple[str, str]]:
+    """The body keys of an initial state (BODY_STATE_KEYS): given on a body exactly when its
+    material takes its state from them (BaseMaterial.body_state_keys)."""
+    problems = []
+    for name in BODY_STATE_KEYS:
+        if name in material.body_state_keys:
+            if getattr(body, name) is None:
+                problems.append((f"{path}.{name}", f"required for an {material.model!r} material"))
+        elif getattr(body, name) is not None:
+            users = " or ".join(repr(model) for model, declared in material_registry.REGISTRY.items()
+                                if name in declared.schema.body_state_keys)
+            problems.append((f"{path}.{name}", f"only used with an {users} material"))
     return problems
 
 
@@ -1283,7 +1294,7 @@ def _initial_stress_problems(path: str, body: Body, material: Any, scene: Scene)
     if len(gravity) != 1:
         problems.append((path, "a geostatic stress needs a gravity along one axis of the grid "
                                f"(gravity is {scene.gravity})"))
-    if isinstance(material, (Rigid, IdealGas)):
+    if material.rigid or material.body_state_keys:   # no stress of its own, or one its bodies give
         problems.append((path, f"not for a {material.model!r} material"))
     elif body.initial_stress.k0 is None and not hasattr(material, "default_k0"):
         problems.append((f"{path}.k0", f"required for a {material.model!r} material (the default 1 - sin(phi) "

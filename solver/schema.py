@@ -85,6 +85,13 @@ class BaseMaterial(SceneModel):
     thermal_expansion: Real | None = None              # alpha, 1/K; None or 0: no thermal strain
     # method keys this material sets where the scene leaves them out (Scene._material_method_defaults)
     method_defaults: ClassVar[dict[str, Any]] = {}
+    # What the scene's checks (solver/scene.py) ask of a material, declared by the material so
+    # that the scene imports no material class. rigid: its bodies follow their prescribed
+    # velocity (solver/rigid.py) and have no stress of their own.
+    rigid: ClassVar[bool] = False
+    # The body keys that give its bodies their initial state (a gas's density and pressure):
+    # required on its bodies, refused on the bodies of every other material.
+    body_state_keys: ClassVar[tuple[str, ...]] = ()
     pore_fluid: PoreFluid | None = None                # saturated soil (solid skeletons only)
 
     @field_validator("model", check_fields=False)
@@ -104,6 +111,11 @@ class BaseMaterial(SceneModel):
 
     def body_problems(self, path: str, body: Any) -> list[tuple[str, str]]:
         """What a body made of this material lacks (path: the body's, "bodies[i]")."""
+        return []
+
+    def temperature_problems(self, path: str, body: Any) -> list[tuple[str, str]]:
+        """What this material lacks for a body of it to start at the body's initial_temperature
+        (checked after the body's state keys)."""
         return []
 
     @property

@@ -32,6 +32,7 @@ class IdealGas(BaseMaterial):
     # the L1 density error 0.039 (0.021 at cfl 0.2). The C1 cubic splines keep the volumes with
     # the particles: 0.0044 at cfl 0.5 (docs/benchmarks.md "Sod", issue 51).
     method_defaults: ClassVar[dict[str, Any]] = {"shape_function": "cubic_bspline"}
+    body_state_keys: ClassVar[tuple[str, ...]] = ("initial_density", "initial_pressure")
 
     def sound_speed(self, density: float, pressure: float) -> float:
         """sqrt(gamma p / rho); the wave speed depends on the body's state."""

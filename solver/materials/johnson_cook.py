@@ -4,7 +4,7 @@ B.3; the update is solver/materials/kernels/johnson_cook.py with kernels/eos.py
 and kernels/damage.py)."""
 
 import math
-from typing import Annotated, Literal, Union
+from typing import Annotated, Any, Literal, Union
 
 import numpy as np
 from pydantic import Field, Strict, ValidationInfo, field_validator, model_validator
@@ -50,7 +50,8 @@ class JohnsonCook(ElasticMaterial):
     C: NonNegative
     reference_strain_rate: Positive
     # thermal softening exponent: only used where a temperature can leave room_temperature
-    # (heating, or a body's initial_temperature); scene._johnson_cook_problems asks for it there
+    # (heating, or a body's initial_temperature); _thermal_keys_with_heating and
+    # temperature_problems ask for it there
     m: Positive | None = None
     room_temperature: NonNegative
     melt_temperature: Positive
@@ -68,6 +69,14 @@ class JohnsonCook(ElasticMaterial):
     @property
     def heats(self) -> bool:
         return self.taylor_quinney > 0
+
+    def temperature_problems(self, path: str, body: Any) -> list[tuple[str, str]]:
+        start = body.initial_temperature
+        if self.m is None and start is not None and start != self.room_temperature:
+            return [(f"materials.{body.material}.m", f"required: {path} starts at initial_temperature = "
+                                                     f"{fmt(start)}, not room_temperature, "
+                                                     "so the thermal softening exponent is used")]
+        return []
 
     @model_validator(mode="after")
     def _thermal_keys_with_heating(self) -> "JohnsonCook":

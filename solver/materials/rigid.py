@@ -1,7 +1,7 @@
 """The `rigid` material: particles that follow their body's prescribed velocity
 (solver/rigid.py; its solver object is solver/materials/kernels/rigid.py)."""
 
-from typing import Literal
+from typing import ClassVar, Literal
 
 from solver.materials.registry import MaterialType
 from solver.schema import BaseMaterial, Positive
@@ -12,6 +12,7 @@ class Rigid(BaseMaterial):
 
     model: Literal["rigid"]
     density: Positive
+    rigid: ClassVar[bool] = True
 
 
 MATERIAL = MaterialType(schema=Rigid, solver_class="solver.materials.kernels.rigid:Rigid")
