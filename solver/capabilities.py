@@ -4,8 +4,8 @@ The scene schema (solver/scene.py) describes the whole contract of SCENE.md; a
 feature listed there but not here is rejected at validation with a
 "not supported yet" error naming the field. An issue that implements a feature
 adds it here in the same change, or, for materials, shape functions and output
-fields, registers it: those three sets are the registries' names
-(solver.materials, solver.shape, solver.fields), read each time they are used.
+fields of material state, registers it: those sets are the registries' names
+(solver.materials, solver.shape), read each time they are used.
 """
 
 from collections.abc import Callable, Iterable, Iterator, Set
@@ -21,6 +21,14 @@ CONTACT_NORMALS = frozenset({"mass_gradient", "density_gradient"})
 MAX_CONTACT_FIELD_BYTES = 16 * 2**30   # the per-body grid fields of contact "friction"
 AXISYMMETRIC = True
 MAX_PROCESSES = 64   # MPI ranks (solver/parallel); the service caps jobs further (MPM_MAX_PROCESSES)
+# The output fields solver/fields.py forms for every scene (its FIELDS); the materials add
+# their state's. Named here, not read from solver.fields: that module forms the fields from
+# the particles (solver.state, solver.seeding), which read the scene.
+SCENE_FIELDS = frozenset({
+    "position", "velocity", "stress", "mass", "volume", "density", "pressure", "pressure_smoothed", "von_mises",
+    "velocity_magnitude", "deformation_gradient", "strain_energy_density", "heat_flux", "particle_domain",
+    "pore_pressure", "effective_stress",
+})
 
 
 class RegisteredNames(Set):
@@ -64,8 +72,12 @@ def _shape_functions() -> Iterable[str]:
 
 
 def _output_fields() -> Iterable[str]:
-    from solver import fields
-    return fields.names()
+    from solver import materials
+    outputs = materials.output_fields()
+    taken = sorted(outputs.keys() & SCENE_FIELDS)
+    if taken:   # a material's state would hide a field of every scene, or the other way round
+        raise ValueError(f"material state declared as output fields that every scene has: {taken}")
+    return SCENE_FIELDS | outputs.keys()
 
 
 MATERIAL_MODELS = RegisteredNames(_material_models)

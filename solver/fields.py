@@ -118,28 +118,16 @@ FIELDS = {
     "pore_pressure": _pore_pressure,
     "effective_stress": lambda sim: voigt(sim.particles.stress),
 }
-"""The fields of every scene; the materials add their state's (plastic_strain, damage,
-temperature, internal_energy, ...: solver.materials.output_fields)."""
-
-
-def names() -> frozenset[str]:
-    """Every output field the solver can write now."""
-    return frozenset(FIELDS) | frozenset(_material_outputs())
+"""The fields of every scene (capabilities.SCENE_FIELDS names them for the scene's checks);
+the materials add their state's (plastic_strain, damage, temperature, internal_energy, ...:
+solver.materials.output_fields; capabilities.OUTPUT_FIELDS refuses a name in both)."""
 
 
 def field(name: str):
     """The function sim -> per-particle values of output field `name`."""
     if name in FIELDS:
         return FIELDS[name]
-    return _state(name, _material_outputs()[name])
-
-
-def _material_outputs() -> dict[str, float]:
-    outputs = materials.output_fields()
-    taken = sorted(outputs.keys() & FIELDS.keys())
-    if taken:   # a material's state would hide a field of every scene, or the other way round
-        raise ValueError(f"material state declared as output fields that every scene has: {taken}")
-    return outputs
+    return _state(name, materials.output_fields()[name])
 
 
 class FrameFields(Mapping):
