@@ -43,7 +43,7 @@ def scene(scale: int, threads: int, contact: bool, heat: bool = False) -> dict:
 
 
 def placed(variant: str, scale: int, threads: int):
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     s = load_scene(scene(scale, threads, variant.startswith("contact"), variant == "contact-heat"))
     sim = ExplicitMPM(s, general=variant == "general")

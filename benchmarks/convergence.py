@@ -38,7 +38,8 @@ from solver.manufactured import (  # noqa: E402
     R_OUT, Options, cube_displacement, cube_scene, vortex_displacement, vortex_scene,
 )
 from solver.norms import DisplacementErrors, observed_orders  # noqa: E402
-from solver.scene import SceneError, load_scene  # noqa: E402
+from solver.scene import SceneError  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM, Instability  # noqa: E402
 
 G = 0.05

@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from interleaved import round_times  # noqa: E402
 
 from solver.manufactured import Options, cube_scene  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 SCENES = {"2D square h=1/32": (2, 1 / 32), "3D cube h=1/8": (3, 1 / 8)}

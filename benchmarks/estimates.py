@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 from solver import cost  # noqa: E402
 from solver.examples import list_examples, load_example  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.summary import summarize, time_step  # noqa: E402
 
 

@@ -25,7 +25,7 @@ from mpm_cases import Case  # noqa: E402
 from test_fbar_column import column_measures, column_scene  # noqa: E402
 
 from solver import run  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 ELASTIC = {"density": 1000.0, "youngs_modulus": 2.0e5, "poisson_ratio": 0.4999}

@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
 from throughput import DT, MLS_DT, MPM88_DT, block_scene, mls_block_scene, mpm88_scene  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 from solver.step.fused import CHOICES  # noqa: E402
 

@@ -19,7 +19,7 @@ import numba
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 ELASTIC = {"model": "neo_hookean", "density": 1000.0, "youngs_modulus": 1e6, "poisson_ratio": 0.3}

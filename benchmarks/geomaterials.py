@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT / "tests" / "verification"))
 from mpm_cases import Case  # noqa: E402
 from solver import materials, run  # noqa: E402
 from solver.results import read_frame, read_series  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 EXAMPLES = ROOT / "examples"

@@ -40,7 +40,7 @@ import numpy as np  # noqa: E402
 
 import heat_cases as hc  # noqa: E402
 
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 THERMAL = {"thermal_conductivity": 50.0, "specific_heat": 500.0, "thermal_expansion": 1.0e-5}

@@ -34,7 +34,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import base_kernels  # noqa: E402
 from karamelo_anchor import anchor_scene  # noqa: E402
 from solver.materials.kernels import johnson_cook  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 

@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import numba  # noqa: E402
 
 from solver import fused  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.step.fused import _flat  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 from throughput import DT, block_scene  # noqa: E402

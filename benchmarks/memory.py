@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from solver.examples import load_example  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.summary import summarize, time_step  # noqa: E402
 
 BASE = "taylor_bar_3d"

@@ -58,7 +58,7 @@ import numba  # noqa: E402
 from numba import njit  # noqa: E402
 
 from solver import fused, fused_template  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.step.fused import _material_lines  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 from reference_mls import ReferenceMLS, ReferenceMPM88  # noqa: E402

@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from throughput import mls_block_scene  # noqa: E402
 
 from solver import fused  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 BLOCK = 4   # cells per block side

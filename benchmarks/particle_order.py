@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from throughput import MLS_DT, block_scene, mls_block_scene, rate  # noqa: E402
 
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 METHODS = {

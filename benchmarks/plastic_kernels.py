@@ -35,7 +35,7 @@ import base_kernels  # noqa: E402
 from geomaterials import MODELS, scene_with  # noqa: E402
 from solver import materials  # noqa: E402
 from solver.materials.kernels import drucker_prager, j2_plasticity, mohr_coulomb  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 MODULES = {"j2_plasticity": j2_plasticity, "drucker_prager": drucker_prager, "mohr_coulomb": mohr_coulomb}

@@ -58,7 +58,7 @@ def bar_calls(dt_at: float):
     from johnson_cook_kernel import kernel_args
     from karamelo_anchor import anchor_scene
 
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     scene = anchor_scene(1e-4)
     scene["parallel"] = {"threads": 1}

@@ -92,7 +92,7 @@ def time_calls(domain, names: tuple[str, ...]) -> list[float]:
 
 
 def probe(scene_path: str, steps: int, warmup: int) -> None:
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
 
     scene = load_scene(Path(scene_path))

@@ -38,7 +38,7 @@ from taylor_bar import taylor_scene  # noqa: E402
 
 from solver import run  # noqa: E402
 from solver.summary import time_step  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 
 
 def example(name: str) -> dict:

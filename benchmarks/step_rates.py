@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 MEASURE = r"""
 import json, sys, time
 sys.path.insert(0, ".")
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 try:
     from solver.runner import make_simulation
 except ImportError:

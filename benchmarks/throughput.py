@@ -45,7 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from reference_mls import ReferenceMLS, ReferenceMPM88  # noqa: E402
 from reference_mpm2d import ReferenceMPM2D  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 DT = 1e-6
@@ -253,7 +253,7 @@ def startup_seconds() -> float:
         path = Path(tmp) / "tiny.json"
         path.write_text(json.dumps(scene))
         code = ("import time, sys; t0 = time.perf_counter();"
-                "from solver.scene import load_scene; from solver.stepper import ExplicitMPM;"
+                "from solver.scene_checks import load_scene; from solver.stepper import ExplicitMPM;"
                 "sim = ExplicitMPM(load_scene(sys.argv[1])); sim.advance(1e-6);"
                 "print(time.perf_counter() - t0)")
         subprocess.run([sys.executable, "-c", code, str(path)], check=True, capture_output=True)   # warm the cache

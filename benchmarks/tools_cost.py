@@ -51,7 +51,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=100)
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     sims = {name: ExplicitMPM(load_scene(scene(args.cells, name == "tool"))) for name in ("bare", "tool")}
     for sim in sims.values():   # compile, and bring the tool into the slab

@@ -79,7 +79,7 @@ class FusedReference(ReferenceMLS):
 
 
 def block(cells: int, threads: int) -> tuple:
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     sim = ExplicitMPM(load_scene(mls_block_scene(2, cells, threads, "mls")))
     p, model = sim.particles, sim.materials[0][0]

@@ -34,7 +34,7 @@ import numpy as np  # noqa: E402
 import pore_fluid_cases as pc  # noqa: E402
 from heat import one_step, timed  # noqa: E402   (benchmarks/heat.py: the same step timing)
 
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 
 WATER = {"bulk_modulus": 2.2e9, "density": 1000.0, "hydraulic_conductivity": 1.0e-5, "porosity": 0.4}

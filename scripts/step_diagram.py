@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.step.hooks import POINTS  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
 

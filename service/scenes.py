@@ -1,4 +1,4 @@
-"""Scene validation for the API (solver.scene, solver.summary) and the scene routes:
+"""Scene validation for the API (solver.scene_checks, solver.summary) and the scene routes:
 validate, a Karamelo input file imported, the JSON Schema, the built-in examples."""
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ from pydantic_core import PydanticCustomError
 from solver import capabilities
 from solver.karamelo import KarameloError, translate
 from solver.examples import ExampleNotFound, list_examples, load_example
-from solver.scene import Limits, Scene, SceneError, load_scene
+from solver.scene import Scene, SceneError
+from solver.scene_checks import Limits, load_scene
 from solver.summary import empty_bodies, summarize
 
 from service.auth import caller

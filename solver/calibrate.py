@@ -85,7 +85,7 @@ def block_scene(dim: int, particles: int, grid_factor: float = 1.0, material: st
 def step_seconds(document: dict, general: bool = False) -> tuple[float, int, int]:
     """(seconds per step, particles, nodes) of a scene stepped here."""
     from solver.runner import make_simulation
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
 
     scene = load_scene(document)

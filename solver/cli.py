@@ -68,7 +68,8 @@ def _print_scene_errors(source: str, error) -> None:
 def _load(path: str | dict, processes: int | None = None, threads: int | None = None):
     """The validated scene of a file (or a scene document), with ``parallel.processes``
     and ``parallel.threads`` overridden where given; None after printing errors."""
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
 
     # a local command: a checkpoint's scene may read its files too (their names were made absolute)
     files = Path.cwd() if isinstance(path, dict) else Path(path).resolve().parent
@@ -275,7 +276,8 @@ def register_validate(subparsers) -> None:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from solver.scene import MACHINE_LIMITS, SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import MACHINE_LIMITS, load_scene
 
     scene = _load(args.scene)
     if scene is None:
@@ -436,7 +438,8 @@ def register_import(subparsers) -> None:
 
 def cmd_import(args: argparse.Namespace) -> int:
     from solver.karamelo import KarameloError, translate_file
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
 
     try:
         translation = translate_file(args.file)

@@ -749,7 +749,8 @@ class _Translator:
 def _probe(scene: dict, cfl: float):
     """The scene as validated with a placeholder end and cfl (to read its wave speeds and first
     step before its end is known); None where it is not valid yet (its errors come later)."""
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
 
     trial = {**scene, "time": {**scene["time"], "end": 1.0, "cfl": cfl}, "output": {}}
     trial["time"].pop("dt", None)

@@ -118,7 +118,7 @@ def compile_backwards(sim, dt: float) -> None:
 
 def main(path: str) -> int:
     from solver.runner import make_simulation
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
 
     try:
         scene = load_scene(json.loads(open(path).read()))

@@ -22,7 +22,8 @@ from solver import checkpoint, cost, energy, precompile, series
 from solver.compile_meter import CompileMeter
 from solver.fields import frame_fields
 from solver.progress import RateMeter
-from solver.scene import Scene, load_scene
+from solver.scene import Scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM, Instability
 
 # An energy above this many times what went in (initial energy plus the work of

@@ -1,4 +1,4 @@
-"""The scene: pydantic models of the whole contract in SCENE.md, and ``load_scene``.
+"""The scene: pydantic models of the whole contract in SCENE.md, and ``parse_scene``.
 
 Validation happens in two passes, both reporting every problem they find:
 
@@ -17,11 +17,14 @@ feature only edits ``capabilities.py``, or registers it.
 The materials (their scene entries) and the shape functions come from their
 registries (solver.materials, solver.shape); the building blocks shared with the
 material declarations are in solver/schema.py. This module loads without numba.
+
+The checks that count a scene (its size against limits, its time step against the
+stability limit) read these models, and run above them: solver.scene_checks.load_scene
+is what loads a scene for a run, the CLI and the service.
 """
 
 import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
@@ -324,7 +327,7 @@ FILES_REFUSED = ("a scene sent as a document cannot name a file (the service nev
 
 def files_folder(info: ValidationInfo) -> Path | None:
     """The folder a scene's relative file names start from; None where files may not be read
-    (a scene validated without load_scene's `files`, as the service does)."""
+    (a scene validated without parse_scene's `files`, as the service does)."""
     folder = (info.context or {}).get("files")
     return None if folder is None else Path(folder)
 
@@ -1347,53 +1350,26 @@ def _outside_grid(path: str, body: Body, scene: Scene) -> list[tuple[str, str]]:
     return [(path, f"the body (bounding box {box}) extends outside the grid {grid}")]
 
 
-# --------------------------------------------------------------------------- loading
+# --------------------------------------------------------------------------- reading
 
-@dataclass(frozen=True)
-class Limits:
-    """Size limits checked by ``load_scene`` (None: unlimited)."""
-
-    max_particles: int | None = None
-    max_grid_nodes: int | None = None
-    max_steps: int | None = None
-    max_memory_bytes: int | None = None   # the estimate of solver.summary.memory_estimate
-
-
-# What one machine could hold at all: `mpm validate` checks these before counting, so an
-# absurd scene (a 1 m grid of 1 nm cells) is refused at once rather than counted for ever.
-MACHINE_LIMITS = Limits(max_particles=10**8, max_grid_nodes=10**9)
-
-
-def load_scene(source: "str | Path | dict | Scene", limits: Limits | None = None,
-               files: "str | Path | None" = None, stability: bool = True) -> Scene:
-    """Validate a scene given as a path to a JSON file, JSON text, a dict or a Scene.
+def parse_scene(source: "str | Path | dict | Scene", files: "str | Path | None" = None) -> Scene:
+    """A scene given as a path to a JSON file, JSON text, a dict or a Scene, validated against
+    the schema (solver.scene_checks.load_scene checks its size and time step after this).
 
     `files`: the folder the scene's relative file names (mesh files) start from; a scene
     read from a file reads them beside it. Without it a scene given as a document may not
     name files at all (what the service relies on: it never opens a path named in a scene).
-    `stability`: refuse a fixed time.dt above the stability limit (solver/stability.py),
-    after the limits, so that an absurd scene is refused for its size.
 
     Raises SceneError listing every problem found."""
     if isinstance(source, Scene):
-        scene = source
-    else:
-        data = _read(source)
-        if files is None and _is_path(source):
-            files = Path(source).resolve().parent
-        try:
-            scene = Scene.model_validate(data, context={"files": files, "polygons": [0, 0, False]})
-        except ValidationError as exc:
-            raise SceneError(_format_errors(exc, data)) from None
-    over = _limit_problems(scene, limits) if limits is not None else []
-    if over:   # each names the Limits field it is over ("limit"), for the service to name its setting
-        raise SceneError([{"path": path, "message": message, "limit": limit} for path, message, limit in over])
-    if stability:   # the stability limit reads a sound scene of a size within the limits
-        from solver.stability import time_step_problems   # (it reads this module's constants)
-        problems = time_step_problems(scene)
-        if problems:
-            raise SceneError([{"path": path, "message": message} for path, message in problems])
-    return scene
+        return source
+    data = _read(source)
+    if files is None and _is_path(source):
+        files = Path(source).resolve().parent
+    try:
+        return Scene.model_validate(data, context={"files": files, "polygons": [0, 0, False]})
+    except ValidationError as exc:
+        raise SceneError(_format_errors(exc, data)) from None
 
 
 def _is_path(source: Any) -> bool:
@@ -1501,46 +1477,3 @@ def _message(error: dict) -> str:
     for prefix in ("Value error, ", "Assertion failed, "):
         message = message.removeprefix(prefix)
     return message.replace("Input should be", "must be")
-
-
-# Counting a scene's particles tests each candidate position against each primitive
-# shape of its body's geometry; a scene needing more than this many tests per allowed
-# particle (a few tenths of a second for the default MPM_MAX_PARTICLES) is refused from
-# arithmetic alone, before anything is counted or allocated.
-COUNT_FACTOR = 8
-
-
-def _limit_problems(scene: Scene, limits: Limits) -> list[tuple[str, str, str]]:
-    """(path, message, the Limits field) of every limit decided before any loop or allocation
-    proportional to the scene's size: nodes and steps from arithmetic, particles from the
-    candidates' count (arithmetic), counted only when that is within COUNT_FACTOR times the
-    limit; the memory, within those, from the candidates (an upper bound of the particles)."""
-    # Imported here: summary and seeding read the Scene defined in this module.
-    from solver.seeding import count_candidates, count_particles
-    from solver.summary import estimate_steps, memory_limit_problem
-
-    problems = []
-    nodes = math.prod(n + 1 for n in scene.grid_shape())
-    if limits.max_grid_nodes is not None and nodes > limits.max_grid_nodes:
-        problems.append(("grid", f"{nodes} grid nodes, over the limit of {limits.max_grid_nodes}", "max_grid_nodes"))
-    if limits.max_steps is not None:
-        steps = estimate_steps(scene)
-        if steps > limits.max_steps:
-            problems.append(("time", f"about {steps} time steps, over the limit of {limits.max_steps}", "max_steps"))
-    candidates, tests = count_candidates(scene)
-    if limits.max_particles is not None:
-        if tests > COUNT_FACTOR * limits.max_particles:
-            problems.append(("bodies", f"the bodies' bounding boxes hold {candidates:.3g} candidate particles "
-                                       f"(overlapping cells x particles_per_cell^{scene.dimension}), "
-                                       f"{tests:.3g} point-in-shape tests with their geometries' parts: more "
-                                       f"than {COUNT_FACTOR} x the limit of {limits.max_particles} particles",
-                             "max_particles"))
-        elif candidates > limits.max_particles:
-            if sum(count_particles(scene, stop_above=limits.max_particles)) > limits.max_particles:
-                problems.append(("bodies", f"more particles than the limit of {limits.max_particles}",
-                                 "max_particles"))
-    if limits.max_memory_bytes is not None and not problems:
-        memory = memory_limit_problem(scene, candidates, nodes, limits.max_memory_bytes)
-        if memory is not None:
-            problems.append((*memory, "max_memory_bytes"))
-    return problems

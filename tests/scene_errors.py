@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from solver.scene import SceneError
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 
 def errors_of(scene, **options) -> list[dict]:

@@ -47,7 +47,7 @@ WARMUP = ((1, "linear_elastic"), (2, "linear_elastic"), (2, "neo_hookean"),
 def pending(variants=WARMUP) -> list[tuple[int, str]]:
     """The variants not yet compiled into this version's kernel cache."""
     from solver import cost
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
 
     return [(dim, model) for dim, model in variants if not cost.is_compiled(load_scene(_tiny_scene(dim, model)))]
 

@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 from solver import precompile
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 SCENE = {"version": 1, "name": "helper", "dimension": 1, "method": {"scheme": "musl"},
          "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},

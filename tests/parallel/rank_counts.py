@@ -4,7 +4,7 @@ import json
 import sys
 from pathlib import Path
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 scene = load_scene(Path(sys.argv[1]))

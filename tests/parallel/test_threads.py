@@ -24,7 +24,7 @@ import pytest
 from ranks import AXISYMMETRIC, PORE_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference, run_cli, scene
 from solver import fused
 from solver.results import read_scene
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 TOLERANCE = 1e-12

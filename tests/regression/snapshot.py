@@ -28,7 +28,7 @@ from unittest import mock
 import numpy as np
 
 from solver.runner import make_simulation
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 BASELINE = Path(__file__).with_name("baseline.npz")
 SAMPLE_ROWS = 32

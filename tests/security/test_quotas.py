@@ -11,7 +11,7 @@ import pytest
 from quota_api import QuotaApi
 from service_support import two_disks
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.summary import summarize
 
 

@@ -10,7 +10,7 @@ from solver import cli
 from solver.animation import AnimationError, render_animation
 from solver.preview import axis_labels, draw_frame, new_figure
 from solver.results import ResultWriter, read_frame, read_scene
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from test_preview import block, scene as preview_scene
 
 FRAMES = 3

@@ -177,7 +177,8 @@ def test_an_unreadable_result_file_makes_the_resume_start_again(reference, tmp_p
 
 
 def test_the_checkpoint_interval_is_validated():
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     with pytest.raises(SceneError) as error:
         load_scene(column(checkpoint={}))
     assert error.value.errors[0]["path"] == "output.checkpoint"

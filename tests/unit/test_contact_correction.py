@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from solver import contact
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 
 
 def random_nodes(rng, n, fields, dim, rigid=None):

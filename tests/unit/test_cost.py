@@ -4,7 +4,7 @@ import json
 import pytest
 
 from solver import cost
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 RUBBER = {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1000, "poisson_ratio": 0.3}
 STEEL = {"model": "j2_plasticity", "density": 7800, "youngs_modulus": 2e11, "poisson_ratio": 0.3,

@@ -142,7 +142,8 @@ def _scene(**method):
     ({"axisymmetric": True}, "method.shape_function", "not supported in axisymmetric scenes"),
 ])
 def test_refused_where_the_review_gives_no_cpdi(change, path, words):
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     scene = {**_scene(), **change}
     with pytest.raises(SceneError) as error:
         load_scene(scene)
@@ -152,7 +153,7 @@ def test_refused_where_the_review_gives_no_cpdi(change, path, words):
 def test_particle_domain_field_is_the_seeded_box_carried_by_F():
     """Corners x_p + F diag(l0/2) s_c (axis 0 fastest), l0 = h / particles_per_cell."""
     from solver.fields import field
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     sim = ExplicitMPM(load_scene(_scene()))
     p = sim.particles
@@ -217,7 +218,8 @@ def test_q4_on_random_quadrilaterals_reproduces_the_centroid_and_linear_gradient
 
 
 def test_q4_is_refused_outside_2d():
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     scene = _scene(shape_function="cpdi_q4")
     load_scene(scene)
     scene.update(dimension=3, grid={"lower": [0, 0, 0], "upper": [1, 1, 1], "cell_size": 0.25})
@@ -309,7 +311,7 @@ def test_tet4_3d_run_tracks_the_domains_and_keeps_each_particle_at_its_centroid(
     particles' V = V0 det F, equal to O(strain^2) -- 1e-3 here), and the `particle_domain` field
     is the tracked corners."""
     from solver.fields import field
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     sim = ExplicitMPM(load_scene(_scene_3d(shape_function="cpdi_tet4")))
     p = sim.particles
@@ -326,7 +328,8 @@ def test_tet4_3d_run_tracks_the_domains_and_keeps_each_particle_at_its_centroid(
 
 
 def test_tet4_is_refused_outside_3d():
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     with pytest.raises(SceneError) as error:
         load_scene(_scene(shape_function="cpdi_tet4"))
     assert any(e["path"] == "method.shape_function" and "3D" in e["message"] for e in error.value.errors)
@@ -344,7 +347,7 @@ def test_compact_stencil_gives_the_wide_stencils_results_bit_for_bit(shape_funct
     same order, so every sum in the transfers adds the same terms in the same order: the
     particles come out equal bit for bit (a run on the wide stencil from the start against
     one on the compact stencil, 30 steps of a block falling onto a slip floor)."""
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     scene = _scene_3d(shape_function=shape_function) if dim == 3 else {
         **_scene(shape_function=shape_function), "gravity": [0.0, -10.0],
@@ -368,7 +371,7 @@ def test_a_domain_outgrowing_the_stencil_widens_it_as_far_as_it_needs_for_the_re
     (corners at -0.1625 and 0.7875, in cells 3 and 7 of a grid from -1) to the 6 its corners
     span, instead of stopping. Either way it goes on with the same bits as a run that had
     that stencil from the start."""
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     scene = load_scene({**_scene(), "grid": {"lower": [grid_lower, 0.0], "upper": [1.0 - 3 * grid_lower, 1.0],
                                              "cell_size": 0.25}})

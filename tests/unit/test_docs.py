@@ -65,7 +65,8 @@ def test_no_doc_calls_an_implemented_feature_not_supported(doc, paragraph):
 def test_the_unsupported_example_of_scene_md_is_what_validation_says():
     """docs/scene.md quotes the error of an unsupported feature (too many processes): the
     solver gives it, word for word."""
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     quoted = re.search(r"`(parallel\.processes): ((\d+) processes is not supported yet \(at most \d+\))`",
                        (ROOT / "docs" / "scene.md").read_text(encoding="utf-8"))
     assert quoted, "docs/scene.md no longer quotes the unsupported-feature error"

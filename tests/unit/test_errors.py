@@ -7,7 +7,8 @@ from solver.examples import ExampleNotFound, load_example
 from solver.expressions import ExpressionError, compile_expression
 from solver.preview import UnknownField
 from solver.results import FrameNotFound
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.stepper import Instability
 
 

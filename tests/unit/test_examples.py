@@ -7,7 +7,7 @@ import pytest
 
 from solver.examples import DEFAULT_DIR, ExampleNotFound, list_examples, load_example
 from solver.mesh import inline_files
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.summary import summarize
 
 EXAMPLE_FILES = sorted(DEFAULT_DIR.glob("*.json"))

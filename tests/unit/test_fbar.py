@@ -47,7 +47,8 @@ def test_cell_jacobian_is_the_volume_weighted_mean_and_each_particle_keeps_its_s
 
 
 def test_fbar_is_a_strict_boolean_off_by_default():
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     scene = {"version": 1, "name": "s", "dimension": 2, "grid": {"lower": [0, 0], "upper": [1, 1], "cell_size": 0.25},
              "materials": {"m": {"model": "linear_elastic", "density": 1, "youngs_modulus": 1, "poisson_ratio": 0.3}},
              "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25, 0.25],

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from solver.examples import load_example
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.state import make_materials, make_particles
 
 K, GAMMA, RHO0 = 2.0e6, 7.0, 1000.0

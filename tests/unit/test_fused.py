@@ -20,7 +20,7 @@ import pytest
 from numba import njit
 
 from solver import fused, fused_template, generated, near_one_log, shape
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.step.fused import FusedPhases
 from solver.stepper import ExplicitMPM, Instability
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from solver import geometry
-from solver.scene import Limits, SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import Limits, load_scene
 from solver.summary import empty_bodies, memory_estimate, summarize
 
 from test_scene_validation import two_disks

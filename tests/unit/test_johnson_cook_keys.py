@@ -5,7 +5,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "copper_bar_impact_2d.json"

@@ -12,7 +12,8 @@ import pytest
 from solver import cli
 from solver.karamelo import KarameloError, translate, translate_file
 from solver.runner import make_simulation
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "karamelo"
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

@@ -7,7 +7,7 @@ import math
 import pytest
 
 from solver.karamelo import DEFAULT_DT_FACTOR, MAX_FRAMES, KarameloError, translate
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stability import stable_limit
 
 # a 2D elastic block on a 1 x 1 grid of 0.1 cells: K + 4/3 G = E (1 - nu) / ((1 + nu)(1 - 2 nu))

@@ -8,7 +8,7 @@ from pathlib import Path
 from numba.core import caching
 
 from solver import cost, kernel_cache
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -14,7 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "verification"))
 from mesh_shapes import ascii_stl, binary_stl, cube, icosphere, obj  # noqa: E402
 
 from solver import mesh  # noqa: E402
-from solver.scene import load_scene  # noqa: E402
+from solver.scene_checks import load_scene  # noqa: E402
 from solver.seeding import seed  # noqa: E402
 from tests.scene_errors import errors_of
 

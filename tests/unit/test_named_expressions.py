@@ -11,7 +11,8 @@ import pytest
 
 from solver.expressions import (MAX_DEFINITION_CHAIN, MAX_DEFINITIONS, MAX_LENGTH, ExpressionError,
                                 compile_expression, definition_problems)
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 DEFINITIONS = {"r": "sqrt(x*x + y*y)", "h": "1 - 8*r**2", "g": "sin(pi*t)", "alpha": "g*h"}

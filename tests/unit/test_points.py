@@ -8,7 +8,8 @@ import h5py
 import numpy as np
 import pytest
 
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.seeding import count_particles, seed
 from tests.scene_errors import errors_of
 

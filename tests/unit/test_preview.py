@@ -9,7 +9,7 @@ from matplotlib.image import imread
 
 from solver.preview import available_fields, finish_outputs, render_preview, scalar_values, von_mises
 from solver.results import ResultWriter
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -19,7 +19,8 @@ import pytest
 from solver import capabilities, fields, materials, run, shape
 from solver.materials import MaterialType, StateVariable
 from solver.results import read_frame, read_series
-from solver.scene import Scene, SceneError, load_scene
+from solver.scene import Scene, SceneError
+from solver.scene_checks import load_scene
 from solver.schema import BaseMaterial, ElasticMaterial, Positive
 from solver.summary import summarize
 from solver.thermal_schema import THERMAL_KEYS
@@ -182,7 +183,7 @@ class TestRegistration:
     def test_the_scene_stays_free_of_numba(self):
         """The service validates and summarizes scenes without loading numba: the
         registries' declarations must not import their kernels."""
-        code = ("import sys; from solver.scene import load_scene; from solver.summary import summarize; "
+        code = ("import sys; from solver.scene_checks import load_scene; from solver.summary import summarize; "
                 "summarize(load_scene('examples/two_disks.json')); print('numba' in sys.modules)")
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                              cwd=Path(__file__).parents[2])

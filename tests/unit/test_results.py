@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from solver.results import ResultWriter, list_frames, read_frame, read_scene, read_series
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 N = 12  # particles per frame
 TIMES = [0.0, 0.05, 0.1]

@@ -55,7 +55,7 @@ def test_smallest_stretch_is_the_smallest_singular_value_of_F(dim):
 def test_tlmpm_time_step_shrinks_with_the_smallest_stretch(tmp_path):
     """TLMPM's cells deform with the body: a particle squashed to 0.2 of its reference size
     along x takes the updated-Lagrangian step times 0.2 (a stretch above 1 leaves it)."""
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stepper import ExplicitMPM
     sim = ExplicitMPM(load_scene(block(method={"formulation": "tlmpm"}, time={"end": 0.05, "dt": None})))
     unstrained = sim.stable_time_step(0.5)

@@ -8,7 +8,7 @@ import pytest
 
 from solver import fields, stability
 from solver.pore_fluid_schema import G_N
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 from tests.scene_errors import errors_of
 

@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from solver import capabilities
-from solver.scene import Limits, Scene, SceneError, load_scene
+from solver.scene import Scene, SceneError
+from solver.scene_checks import Limits, load_scene
 from tests.scene_errors import errors_of
 
 

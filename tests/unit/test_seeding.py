@@ -7,7 +7,7 @@ import pytest
 
 from solver import seeding
 from solver.geometry import Box, Cylinder, Difference, Intersection, Sphere, Union
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.seeding import count_particles, seed
 
 ELASTIC = {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1000, "poisson_ratio": 0.3}

@@ -236,7 +236,7 @@ def test_the_summary_budgets_the_registered_support(monkeypatch):
     per index and per gradient component of each node a particle touches, where the general
     backend stores the stencil."""
     from solver import cost
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.summary import particle_bytes
 
     scene = load_scene(Path(__file__).parents[2] / "examples" / "two_disks.json")   # 2D, linear

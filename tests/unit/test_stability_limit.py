@@ -5,7 +5,8 @@ import pytest
 
 from solver import stability
 from solver.examples import load_example
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 
 
 def two_disks(dt: float, **time) -> dict:

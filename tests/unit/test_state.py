@@ -2,7 +2,7 @@
 import numpy as np
 
 from solver.examples import load_example
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.state import make_particles
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from solver import step
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 SCENE = {

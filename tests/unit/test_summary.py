@@ -6,7 +6,7 @@ import tracemalloc
 import pytest
 
 from solver import capabilities, cost
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.summary import PROCESS_BASELINE_BYTES, memory_estimate, particle_bytes, summarize
 
 RUBBER = {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1000, "poisson_ratio": 0.3}

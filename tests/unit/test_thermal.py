@@ -10,7 +10,7 @@ import pytest
 
 from solver import run
 from solver.results import read_frame, read_series
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 from solver.summary import summarize
 from tests.scene_errors import errors_of

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 UNIT = {"density": 1.0, "youngs_modulus": 1.0, "poisson_ratio": 0.0, "thermal_conductivity": 1.0,

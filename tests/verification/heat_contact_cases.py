@@ -21,7 +21,7 @@ import numpy as np
 import heat_cases as hc
 from test_contact import G, incline
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 THETA, MU = 30.0, 0.3

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from solver.pore_fluid_schema import G_N
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 HEIGHT = 1.0

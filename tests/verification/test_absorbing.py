@@ -15,7 +15,8 @@ import math
 
 import pytest
 
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 E, RHO, NU = 1e6, 1000.0, 0.25

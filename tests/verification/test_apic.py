@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from solver import kernels, shape
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.state import make_stencil
 from solver.stepper import ExplicitMPM
 from solver.transfer import AFFINE, affine_p2g

@@ -215,7 +215,7 @@ def test_geostatic_column_stays_at_rest(axisymmetric):
     stays at rest under gravity (test_geostatic.py says why the MPM equilibrium is exact);
     p_c starts at the ellipse through the initial stress where the given 5 kPa lies inside
     it (below 0.3 m depth), and the time step follows the stiffness of the deepest particle."""
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from solver.stability import fastest_signal
     from test_geostatic import G, column, settle
     clay = {**CLAY, "preconsolidation_pressure": 5e3}
@@ -244,7 +244,8 @@ def test_geostatic_column_stays_at_rest(axisymmetric):
 
 def test_scene_rules():
     """A clay body needs an initial stress; kappa < lambda."""
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     from test_geostatic import column
     scene = column(1.0, None, material={**CLAY, "kappa": 0.3})
     with pytest.raises(SceneError) as error:
@@ -259,7 +260,7 @@ def test_scene_dumps_and_loads_again():
     """`lambda` (a Python keyword: the field is lambda_) is dumped under its scene name, so
     a stored scene (the service's model_dump_json) loads again."""
     import json
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     from test_geostatic import column
     scene = load_scene(column(1.0, {"type": "geostatic"}, material=CLAY))
     dumped = json.loads(scene.model_dump_json())

@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 G, H = 9.81, 0.02

@@ -16,7 +16,7 @@ cell.
 import numpy as np
 import pytest
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 from test_contact import body_momentum, two_disks
 

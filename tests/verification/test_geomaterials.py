@@ -248,7 +248,8 @@ def test_rigid_rotation_turns_the_stress_and_creates_none(model):
 
 
 def test_strength_parameters_are_checked_at_their_paths():
-    from solver.scene import SceneError, load_scene
+    from solver.scene import SceneError
+    from solver.scene_checks import load_scene
     scene = {"dimension": 2, "grid": {"lower": [0, 0], "upper": [1, 1], "cell_size": 0.1},
              "materials": {"sand": soil({"model": "drucker_prager"}, dilation_angle=40.0),
                            "clay": soil({"model": "mohr_coulomb"}, friction_angle=0.0, dilation_angle=0.0, cohesion=0.0)},

@@ -17,7 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 G, RHO, WIDTH = 9.81, 2000.0, 0.4

@@ -14,7 +14,7 @@ import pytest
 
 from mesh_shapes import binary_stl, icosphere, polyhedron_volume
 
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 from solver.seeding import seed
 from solver.stepper import ExplicitMPM
 

@@ -22,7 +22,7 @@ import pytest
 
 from solver.karamelo import translate
 from solver.runner import make_simulation
-from solver.scene import load_scene
+from solver.scene_checks import load_scene
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "karamelo"
 

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from solver.loads import AppliedLoads
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.seeding import seed
 from solver.stepper import ExplicitMPM
 from solver.surface import surface_areas

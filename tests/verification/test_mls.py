@@ -32,7 +32,8 @@ from test_mms_cube import LEVELS
 from solver import kernels, run, shape
 from solver.manufactured import Options, cube_displacement, cube_scene
 from solver.norms import errors_of_result, fitted_order, observed_orders
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 from solver.threads import ScatterCopies
 from solver.transfer import affine_p2g, mls_gradients

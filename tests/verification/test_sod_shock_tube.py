@@ -130,7 +130,7 @@ def defaults_l1(tmp_path, cfl, method=None):
 def test_a_gas_scene_that_names_no_shape_function_gets_the_cubic_splines():
     """The ideal gas's method default (IdealGas.method_defaults), resolved once as the scene is
     read; a shape function the scene names is kept (and so its results)."""
-    from solver.scene import load_scene
+    from solver.scene_checks import load_scene
     assert load_scene(defaults_scene(0.5)).method.shape_function == "cubic_bspline"
     assert load_scene(defaults_scene(0.5, {"shape_function": "linear"})).method.shape_function == "linear"
     assert load_scene(defaults_scene(0.5, {"transfer": "pic"})).method.model_dump()["shape_function"] == "cubic_bspline"

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from solver import series
-from solver.scene import SceneError, load_scene
+from solver.scene import SceneError
+from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
 
 E, NU, RHO = 1e6, 0.3, 1000.0
