@@ -117,14 +117,16 @@ def compile_backwards(sim, dt: float) -> None:
 
 
 def main(path: str) -> int:
-    from solver.runner import make_simulation
     from solver.scene_checks import load_scene
+    # The run's simulation (runner.make_simulation), built here: the runner starts this
+    # helper and would be imported back by it.
+    from solver.stepper import ExplicitMPM
 
     try:
         scene = load_scene(json.loads(open(path).read()))
     finally:
         os.unlink(path)
-    sim = make_simulation(scene)
+    sim = ExplicitMPM(scene)
     compile_backwards(sim, scene.time.dt or sim.stable_time_step(scene.time.cfl))
     return 0
 
