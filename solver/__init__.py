@@ -6,7 +6,7 @@
 `run` is imported lazily so that the schema (`solver.scene`) can be used
 without loading numba.
 """
-__version__ = "0.1.0"
+from solver.version import __version__
 
 __all__ = ["run", "__version__"]
 

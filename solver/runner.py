@@ -17,7 +17,6 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from solver import __version__
 from solver import checkpoint, cost, energy, precompile, series
 from solver.compile_meter import CompileMeter
 from solver.fields import frame_fields
@@ -25,6 +24,7 @@ from solver.progress import RateMeter
 from solver.scene import Scene
 from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM, Instability
+from solver.version import __version__
 
 # An energy above this many times what went in (initial energy plus the work of
 # loads and boundary conditions) can only come from a numerical blow-up.
