@@ -1477,3 +1477,16 @@ def _message(error: dict) -> str:
     for prefix in ("Value error, ", "Assertion failed, "):
         message = message.removeprefix(prefix)
     return message.replace("Input should be", "must be")
+
+
+# `from solver.scene import load_scene, Limits, MACHINE_LIMITS` is how users (docs/scene.md) and
+# scripts load a scene; those names live in solver/scene_checks.py, above this module, and are
+# found there only when asked for (PEP 562), so that importing the schema imports no checks.
+_CHECKS = ("load_scene", "Limits", "MACHINE_LIMITS", "COUNT_FACTOR")
+
+
+def __getattr__(name: str):
+    if name in _CHECKS:
+        from solver import scene_checks
+        return getattr(scene_checks, name)
+    raise AttributeError(f"module 'solver.scene' has no attribute {name!r}")

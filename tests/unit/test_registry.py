@@ -190,6 +190,18 @@ class TestRegistration:
         assert out.stdout.strip() == "False"
 
 
+    def test_the_schema_imports_no_checks_and_still_gives_load_scene(self):
+        """solver.scene is the schema alone (the size and stability checks sit above it, in
+        solver.scene_checks); `from solver.scene import load_scene, Limits`, as users wrote it,
+        still gives the checks' own."""
+        code = ("import sys; import solver.scene; print('solver.scene_checks' in sys.modules); "
+                "from solver.scene import load_scene, Limits; from solver import scene_checks; "
+                "print(load_scene is scene_checks.load_scene and Limits is scene_checks.Limits)")
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                             cwd=Path(__file__).parents[2])
+        assert out.stdout.split() == ["False", "True"]
+
+
 class TestBuiltFromTheRegistries:
     def test_output_fields_are_the_fields_module_and_the_materials_state(self):
         assert set(capabilities.OUTPUT_FIELDS) == set(fields.FIELDS) | set(materials.output_fields())
