@@ -142,6 +142,12 @@ class Retrier:
     url: str = ""   # the service, named in the error when it cannot be reached
     attempt: int = field(default=0, init=False)
 
+    def after(self, outcome: httpx.Response | httpx.TransportError) -> float | None:
+        """:meth:`after_response` or :meth:`after_error`, whichever ``outcome`` of an attempt calls for."""
+        if isinstance(outcome, httpx.TransportError):
+            return self.after_error(outcome)
+        return self.after_response(outcome)
+
     def after_error(self, exc: httpx.TransportError) -> float:
         """The delay before the next attempt, or raises :class:`ServiceUnavailable`."""
         retryable = isinstance(exc, _NOT_SENT) or self.method.upper() in _IDEMPOTENT

@@ -7,30 +7,25 @@ from __future__ import annotations
 
 import asyncio
 import os
-import time
 from pathlib import Path
 from typing import Any, AsyncIterator
 
 import httpx
 
 from . import _api
-from .errors import WaitTimeout
+from ._shared import ClientBase, JobHandle, JobWait
 from .models import ExampleInfo, JobRecord, Summary
-from .progress import ProgressBar
 from .scenes import SceneLike
 
 
-class AsyncClient:
+class AsyncClient(ClientBase):
     """The async twin of :class:`mpm_client.Client` (same arguments, same retries and errors)."""
 
     def __init__(self, base_url: str | None = None, token: str | None = None, *,
                  timeout: float = 30.0, retries: int = 3, backoff: float = 0.25,
                  transport: httpx.AsyncBaseTransport | None = None) -> None:
-        self.base_url = _api.resolve_server(base_url)
-        self.retries = retries
-        self.backoff = backoff
-        self._http = httpx.AsyncClient(base_url=self.base_url, headers=_api.headers(_api.resolve_token(token)),
-                                       timeout=timeout, transport=transport)
+        super().__init__(base_url, token, timeout=timeout, retries=retries, backoff=backoff,
+                         transport=transport, http_class=httpx.AsyncClient)
 
     async def __aenter__(self) -> "AsyncClient":
         return self
@@ -74,21 +69,18 @@ class AsyncClient:
     def _job(self, record: dict[str, Any]) -> "AsyncJob":
         return AsyncJob(self, JobRecord.model_validate(record))
 
-    def _retrier(self, call: _api.Call) -> _api.Retrier:
-        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff, url=self.base_url)
-
     async def _send(self, call: _api.Call) -> httpx.Response:
         retrier = self._retrier(call)
-        while True:
-            try:
-                response = await self._http.request(call.method, call.path, params=call.params, json=call.json)
-            except httpx.TransportError as exc:
-                delay = retrier.after_error(exc)
-            else:
-                delay = retrier.after_response(response)
-                if delay is None:
-                    return response
+        while (delay := retrier.after(outcome := await self._attempt(call))) is not None:
             await asyncio.sleep(delay)
+        return outcome
+
+    async def _attempt(self, call: _api.Call) -> httpx.Response | httpx.TransportError:
+        """One try of ``call``: the response, or the connection error that kept it from coming."""
+        try:
+            return await self._http.request(call.method, call.path, params=call.params, json=call.json)
+        except httpx.TransportError as exc:
+            return exc
 
     async def _download(self, call: _api.Call, path: str | os.PathLike[str]) -> Path:
         retrier = self._retrier(call)
@@ -109,20 +101,10 @@ class AsyncClient:
             await asyncio.sleep(delay)
 
 
-class AsyncJob:
+class AsyncJob(JobHandle):
     """The async twin of :class:`mpm_client.Job`."""
 
-    def __init__(self, client: AsyncClient, record: JobRecord) -> None:
-        self.client = client
-        self.record = record
-        self._downloaded: Path | None = None
-
-    @property
-    def id(self) -> str:
-        return self.record.id
-
-    def __repr__(self) -> str:
-        return f"AsyncJob({self.id!r}, status={self.record.status!r}, progress={self.record.progress:.2f})"
+    client: AsyncClient
 
     async def refresh(self) -> "AsyncJob":
         self.record = (await self.client.job(self.id)).record
@@ -132,21 +114,16 @@ class AsyncJob:
         return (await self.refresh()).record.status
 
     async def wait(self, timeout: float | None = None, poll: float = 0.5, progress: bool = True) -> "AsyncJob":
-        bar = ProgressBar() if progress else None
-        deadline = None if timeout is None else time.monotonic() + timeout
+        waiting = JobWait(self, timeout, poll, progress)
         try:
             while True:
                 await self.refresh()
-                if bar:
-                    bar.update(self.record)
-                if self.record.finished:
-                    return _api.finished(self)
-                if deadline is not None and time.monotonic() >= deadline:
-                    raise WaitTimeout(f"job {self.id} still {self.record.status} after {timeout} s")
-                await asyncio.sleep(poll if deadline is None else max(0.0, min(poll, deadline - time.monotonic())))
+                pause = waiting.pause()
+                if pause is None:
+                    return self
+                await asyncio.sleep(pause)
         finally:
-            if bar:
-                bar.close()
+            waiting.close()
 
     async def cancel(self) -> "AsyncJob":
         await self.client._send(_api.Call("POST", _api.job_path(self.id, "/cancel")))
@@ -177,7 +154,4 @@ class AsyncJob:
         return (await self.client._send(_api.Call("GET", _api.job_path(self.id, "/scene")))).json()
 
     async def open(self, path: str | os.PathLike[str] | None = None) -> Any:
-        candidate = Path(path) if path is not None else self._downloaded
-        if candidate is None or not candidate.is_file():
-            candidate = await self.download(_api.result_path(self.id, path))
-        return _api.open_h5(candidate)
+        return _api.open_h5(self._result_on_disk(path) or await self.download(_api.result_path(self.id, path)))

@@ -10,13 +10,13 @@ from typing import Any, Iterator
 import httpx
 
 from . import _api
+from ._shared import ClientBase, JobHandle, JobWait
 from .errors import WaitTimeout
 from .models import ExampleInfo, JobRecord, Summary
-from .progress import ProgressBar
 from .scenes import SceneLike
 
 
-class Client:
+class Client(ClientBase):
     """A connection to the MPM service.
 
     ``base_url`` defaults to ``$MPM_SERVER`` (else ``http://127.0.0.1:8000``) and
@@ -28,11 +28,8 @@ class Client:
     def __init__(self, base_url: str | None = None, token: str | None = None, *,
                  timeout: float = 30.0, retries: int = 3, backoff: float = 0.25,
                  transport: httpx.BaseTransport | None = None) -> None:
-        self.base_url = _api.resolve_server(base_url)
-        self.retries = retries
-        self.backoff = backoff
-        self._http = httpx.Client(base_url=self.base_url, headers=_api.headers(_api.resolve_token(token)),
-                                  timeout=timeout, transport=transport)
+        super().__init__(base_url, token, timeout=timeout, retries=retries, backoff=backoff,
+                         transport=transport, http_class=httpx.Client)
 
     def __enter__(self) -> "Client":
         return self
@@ -108,21 +105,18 @@ class Client:
     def _job(self, record: dict[str, Any]) -> "Job":
         return Job(self, JobRecord.model_validate(record))
 
-    def _retrier(self, call: _api.Call) -> _api.Retrier:
-        return _api.Retrier(call.method, retries=self.retries, backoff=self.backoff, url=self.base_url)
-
     def _send(self, call: _api.Call) -> httpx.Response:
         retrier = self._retrier(call)
-        while True:
-            try:
-                response = self._http.request(call.method, call.path, params=call.params, json=call.json)
-            except httpx.TransportError as exc:
-                delay = retrier.after_error(exc)
-            else:
-                delay = retrier.after_response(response)
-                if delay is None:
-                    return response
+        while (delay := retrier.after(outcome := self._attempt(call))) is not None:
             time.sleep(delay)
+        return outcome
+
+    def _attempt(self, call: _api.Call) -> httpx.Response | httpx.TransportError:
+        """One try of ``call``: the response, or the connection error that kept it from coming."""
+        try:
+            return self._http.request(call.method, call.path, params=call.params, json=call.json)
+        except httpx.TransportError as exc:
+            return exc
 
     def _download(self, call: _api.Call, path: str | os.PathLike[str]) -> Path:
         """Stream the answer of ``call`` into ``path``; a broken transfer starts over, never half-writes."""
@@ -144,20 +138,10 @@ class Client:
             time.sleep(delay)
 
 
-class Job:
+class Job(JobHandle):
     """A submitted job. ``record`` is the last :class:`JobRecord` fetched (see :meth:`refresh`)."""
 
-    def __init__(self, client: Client, record: JobRecord) -> None:
-        self.client = client
-        self.record = record
-        self._downloaded: Path | None = None
-
-    @property
-    def id(self) -> str:
-        return self.record.id
-
-    def __repr__(self) -> str:
-        return f"Job({self.id!r}, status={self.record.status!r}, progress={self.record.progress:.2f})"
+    client: Client
 
     def refresh(self) -> "Job":
         """Fetch the job record again."""
@@ -175,21 +159,16 @@ class Job:
         :class:`JobCancelled` when it was cancelled, :class:`WaitTimeout` after
         ``timeout`` seconds (the job keeps running).
         """
-        bar = ProgressBar() if progress else None
-        deadline = None if timeout is None else time.monotonic() + timeout
+        waiting = JobWait(self, timeout, poll, progress)
         try:
             while True:
                 self.refresh()
-                if bar:
-                    bar.update(self.record)
-                if self.record.finished:
-                    return _api.finished(self)
-                if deadline is not None and time.monotonic() >= deadline:
-                    raise WaitTimeout(f"job {self.id} still {self.record.status} after {timeout} s")
-                time.sleep(poll if deadline is None else max(0.0, min(poll, deadline - time.monotonic())))
+                pause = waiting.pause()
+                if pause is None:
+                    return self
+                time.sleep(pause)
         finally:
-            if bar:
-                bar.close()
+            waiting.close()
 
     def cancel(self) -> "Job":
         """Ask the service to stop the job; raises :class:`Conflict` if it already finished."""
@@ -239,10 +218,7 @@ class Job:
         Uses ``path`` if that file exists, else downloads to it; without ``path``
         it reuses the last :meth:`download` or downloads into the temp directory.
         """
-        candidate = Path(path) if path is not None else self._downloaded
-        if candidate is None or not candidate.is_file():
-            candidate = self.download(_api.result_path(self.id, path))
-        return _api.open_h5(candidate)
+        return _api.open_h5(self._result_on_disk(path) or self.download(_api.result_path(self.id, path)))
 
 
 class Sweep:
