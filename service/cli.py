@@ -12,6 +12,7 @@ import sys
 
 import uvicorn
 
+from core.cli import subcommand
 from core.logs import configure_logging
 from service.app import create_app
 from service.auth import TokenError, access_notice, load_tokens
@@ -28,15 +29,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-worker", action="store_true",
                         help="API only; workers run elsewhere (`mpm worker`) on MPM_REDIS_URL")
     parser.add_argument("--access-log", action="store_true", help="log every request")
-
-
-def register_serve(subparsers) -> None:
-    parser = subparsers.add_parser(
-        "serve", help="run the service: API, dashboard, a worker, and Redis if none is configured",
-        description="Serve the HTTP API and the dashboard. Without MPM_REDIS_URL an embedded Redis "
-                    "is started (data under MPM_DATA_DIR) and stopped on exit.")
-    add_arguments(parser)
-    parser.set_defaults(func=serve_command)
 
 
 def _interrupt(signum, frame) -> None:
@@ -93,3 +85,11 @@ def serve_command(args: argparse.Namespace) -> int:
             embedded.stop()
     log.info("service stopped")
     return 0
+
+
+# the `mpm.commands` entry point `serve` (pyproject.toml)
+register_serve = subcommand(
+    "serve", add_arguments, serve_command,
+    help="run the service: API, dashboard, a worker, and Redis if none is configured",
+    description="Serve the HTTP API and the dashboard. Without MPM_REDIS_URL an embedded Redis "
+                "is started (data under MPM_DATA_DIR) and stopped on exit.")

@@ -13,6 +13,7 @@ import redis
 from celery.signals import worker_ready, worker_shutdown
 
 from core.celery_app import QUEUE, enqueue, make_celery
+from core.cli import subcommand
 from core.logs import configure_logging
 from core.settings import get_settings
 from worker.disk import remove_expired
@@ -30,15 +31,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="worker name, unique among the workers (default mpm-<pid>@<host>)")
     parser.add_argument("--no-warmup", action="store_true",
                         help="skip compiling the solver kernels at start")
-
-
-def register_worker(subparsers) -> None:
-    parser = subparsers.add_parser(
-        "worker", help="run a worker for the Redis in MPM_REDIS_URL",
-        description="Run jobs from the queue in MPM_REDIS_URL; start any number, on any machines "
-                    "sharing MPM_DATA_DIR.")
-    add_arguments(parser)
-    parser.set_defaults(func=worker_command)
 
 
 def _warm_up_behind(name: str) -> None:
@@ -89,3 +81,11 @@ def worker_command(args: argparse.Namespace) -> int:
     worker.start()
     log.info("worker stopped", extra={"worker": name})
     return worker.exitcode or 0
+
+
+# the `mpm.commands` entry point `worker` (pyproject.toml)
+register_worker = subcommand(
+    "worker", add_arguments, worker_command,
+    help="run a worker for the Redis in MPM_REDIS_URL",
+    description="Run jobs from the queue in MPM_REDIS_URL; start any number, on any machines "
+                "sharing MPM_DATA_DIR.")
