@@ -13,10 +13,11 @@ import functools
 import json
 import sys
 import time
+from contextlib import contextmanager
 from datetime import datetime, timezone
 from importlib.metadata import entry_points
 from itertools import islice
-from typing import Callable
+from typing import Callable, Iterator
 
 from .client import Client, Job
 from .errors import MpmError
@@ -38,6 +39,22 @@ def _connection_options() -> argparse.ArgumentParser:
 
 def _client(args: argparse.Namespace) -> Client:
     return Client(args.server, token=args.token)
+
+
+def _job_parser(subparsers: argparse._SubParsersAction, name: str, func: Handler,
+                **parser_options: str) -> argparse.ArgumentParser:
+    """The parser of a command about one job: the connection options and the job's id."""
+    parser = subparsers.add_parser(name, parents=[_connection_options()], **parser_options)
+    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
+    parser.set_defaults(func=func)
+    return parser
+
+
+@contextmanager
+def _named_job(args: argparse.Namespace) -> Iterator[Job]:
+    """The job that ``args.job_id`` names, its client open for the block."""
+    with _client(args) as client:
+        yield client.job(args.job_id)
 
 
 def _reports_errors(handler: Handler) -> Handler:
@@ -145,16 +162,14 @@ def _age(created: datetime | None) -> str:
 
 
 def register_status(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("status", parents=[_connection_options()], help="show one job")
-    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
+    parser = _job_parser(subparsers, "status", _status, help="show one job")
     parser.add_argument("--json", action="store_true", help="the whole job record as JSON")
-    parser.set_defaults(func=_status)
 
 
 @_reports_errors
 def _status(args: argparse.Namespace) -> int:
-    with _client(args) as client:
-        record = client.job(args.job_id).record
+    with _named_job(args) as job:
+        record = job.record
     if args.json:
         print(json.dumps(record.model_dump(mode="json"), indent=2))
         return 0
@@ -177,35 +192,38 @@ def _status(args: argparse.Namespace) -> int:
 # -- cancel ------------------------------------------------------------------------
 
 
-def register_cancel(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("cancel", parents=[_connection_options()], help="stop a job")
-    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
-    parser.set_defaults(func=_cancel)
+def _job_action(name: str, act: Callable[[Job], str], help: str) -> Callable[[argparse._SubParsersAction], None]:
+    """The ``register_*`` function of a command that does one thing to a job (``act``) and
+    prints the line ``act`` returns."""
+
+    def handler(args: argparse.Namespace) -> int:
+        with _named_job(args) as job:
+            print(act(job))
+        return 0
+
+    handler.__name__ = name  # _reports_errors names the command in its messages by it
+    return lambda subparsers: _job_parser(subparsers, name, _reports_errors(handler), help=help)
 
 
-@_reports_errors
-def _cancel(args: argparse.Namespace) -> int:
-    with _client(args) as client:
-        job = client.job(args.job_id).cancel()
-    print(f"{job.id} {job.record.status}")
-    return 0
+def _cancel(job: Job) -> str:
+    return f"{job.id} {job.cancel().record.status}"
+
+
+register_cancel = _job_action("cancel", _cancel, help="stop a job")
 
 
 # -- download ----------------------------------------------------------------------
 
 
 def register_download(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("download", parents=[_connection_options()],
-                                   help="download a job's result.h5")
-    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
+    parser = _job_parser(subparsers, "download", _download, help="download a job's result.h5")
     parser.add_argument("file", metavar="FILE", help="where to write the HDF5 file")
-    parser.set_defaults(func=_download)
 
 
 @_reports_errors
 def _download(args: argparse.Namespace) -> int:
-    with _client(args) as client:
-        path = client.job(args.job_id).download(args.file)
+    with _named_job(args) as job:
+        path = job.download(args.file)
     print(f"wrote {path}", file=sys.stderr)
     return 0
 
@@ -213,38 +231,27 @@ def _download(args: argparse.Namespace) -> int:
 # -- delete ------------------------------------------------------------------------
 
 
-def register_delete(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("delete", parents=[_connection_options()],
-                                   help="remove a finished job and its files")
-    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
-    parser.set_defaults(func=_delete)
+def _delete(job: Job) -> str:
+    job.delete()
+    return f"{job.id} deleted"
 
 
-@_reports_errors
-def _delete(args: argparse.Namespace) -> int:
-    with _client(args) as client:
-        job = client.job(args.job_id)
-        job.delete()
-    print(f"{job.id} deleted")
-    return 0
+register_delete = _job_action("delete", _delete, help="remove a finished job and its files")
 
 
 # -- log ---------------------------------------------------------------------------
 
 
 def register_log(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("log", parents=[_connection_options()], help="print a job's solver log")
-    parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
+    parser = _job_parser(subparsers, "log", _log, help="print a job's solver log")
     parser.add_argument("--since", type=int, default=0, metavar="N", help="from line N on (0: the first)")
     parser.add_argument("-f", "--follow", action="store_true", help="keep printing new lines until the job ends")
     parser.add_argument("--poll", type=float, default=1.0, help="seconds between reads with --follow")
-    parser.set_defaults(func=_log)
 
 
 @_reports_errors
 def _log(args: argparse.Namespace) -> int:
-    with _client(args) as client:
-        job = client.job(args.job_id)
+    with _named_job(args) as job:
         since = args.since
         while True:
             text, since = job.log(since)
