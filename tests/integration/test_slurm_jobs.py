@@ -16,7 +16,6 @@ import sys
 import time
 
 import h5py
-import httpx
 import numpy as np
 import pytest
 
@@ -65,15 +64,13 @@ def slurm_stack(cluster, tmp_path_factory):
         stack = SlurmStack(redis_server, tmp_path_factory.mktemp("slurm-data"), tmp_path_factory.mktemp("slurm-logs"))
         stack.env.update(cluster.env)   # SLURM_CONF, for sbatch, squeue, scontrol and scancel
         stack.env.update({"MPM_LAUNCHER": "slurm", "MPM_CHECKPOINT_SECONDS": "1", "MPM_SLURM_TIME_LIMIT": "10:00"})
-        try:
-            yield stack.start()
-        finally:
-            stack.stop()
+        with stack.running():
+            yield stack
 
 
 @pytest.fixture
 def api(slurm_stack):
-    with httpx.Client(base_url=slurm_stack.url, timeout=30) as client:
+    with slurm_stack.api_client() as client:
         yield client
 
 
