@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 import httpx
 import pytest
@@ -96,22 +97,35 @@ class LiveService:
         return self.log_path.read_text(errors="replace")[-chars:] if self.log_path.exists() else ""
 
 
-_shared: LiveService | None = None
+class SessionService:
+    """One service for a whole pytest session: started on first use, stopped when the session
+    ends (the SDK and dashboard tests share this one, the security tests secure_service's)."""
+
+    def __init__(self) -> None:
+        self.service: LiveService | None = None
+
+    def get(self, config: pytest.Config, start: Callable[[], LiveService]) -> LiveService:
+        """The service, started by ``start`` the first time."""
+        if self.service is None:
+            self.service = start()
+            config.add_cleanup(self._stop)
+        return self.service
+
+    def _stop(self) -> None:
+        if self.service is not None:
+            self.service.stop()
+            self.service = None
+
+
+_shared = SessionService()
 
 
 def shared_service(config: pytest.Config, tmp_path_factory: pytest.TempPathFactory) -> LiveService:
     """The session's service, started on first use and stopped when the session ends."""
-    global _shared
-    if _shared is None:
+
+    def start() -> LiveService:
         root = tmp_path_factory.mktemp("mpm-serve")
         (root / "data").mkdir()
-        _shared = LiveService(root / "data", root / "serve.log").start()
-        config.add_cleanup(_stop_shared)
-    return _shared
+        return LiveService(root / "data", root / "serve.log").start()
 
-
-def _stop_shared() -> None:
-    global _shared
-    if _shared is not None:
-        _shared.stop()
-        _shared = None
+    return _shared.get(config, start)

@@ -10,7 +10,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "clients"))
 
-from live_service import LiveService  # noqa: E402
+from live_service import LiveService, SessionService  # noqa: E402
 
 # owner -> token (each at least 16 characters, as service/auth.py requires)
 TOKENS = {"alice": "alice-token-0123456789abcdef", "bob": "bob-token-0123456789abcdef",
@@ -37,19 +37,8 @@ class SecureService(LiveService):
         return env
 
 
-_shared: SecureService | None = None
+_shared = SessionService()
 
 
 def shared_secure_service(config: pytest.Config, tmp_path_factory: pytest.TempPathFactory) -> SecureService:
-    global _shared
-    if _shared is None:
-        _shared = SecureService(tmp_path_factory.mktemp("mpm-secure")).start()
-        config.add_cleanup(_stop)
-    return _shared
-
-
-def _stop() -> None:
-    global _shared
-    if _shared is not None:
-        _shared.stop()
-        _shared = None
+    return _shared.get(config, lambda: SecureService(tmp_path_factory.mktemp("mpm-secure")).start())
