@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import os
 import signal
 import socket
@@ -28,6 +29,7 @@ import tempfile
 import time
 from datetime import datetime
 from pathlib import Path
+from typing import Iterator
 
 import httpx
 
@@ -110,6 +112,17 @@ class Stack:
             except subprocess.TimeoutExpired:
                 process.kill()
         self.redis.stop()
+
+
+@contextlib.contextmanager
+def temporary_stack(stack_class: type[Stack] = Stack, prefix: str = "mpm-bench-") -> Iterator[Stack]:
+    """A stack (``stack_class``) on a temporary data folder: stopped after the block, the folder removed."""
+    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
+        stack = stack_class(Path(tmp))
+        try:
+            yield stack
+        finally:
+            stack.stop()
 
 
 def submit(api: httpx.Client, body: dict) -> str:
@@ -213,19 +226,14 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=10, help="jobs for the queue latency")
     args = parser.parse_args()
 
-    with tempfile.TemporaryDirectory(prefix="mpm-bench-") as tmp:
-        stack = Stack(Path(tmp))
-        try:
-            with httpx.Client(base_url=stack.url, timeout=30) as api:
-                latency = queue_latency(api, args.rounds)
-                target = submit(api, scene("under-load", end=args.seconds * 100))
-                wait(api, target, ("running",))
-                load = asyncio.run(status_load(stack.url, target, args.rate, args.seconds))
-                api.post(f"/v1/jobs/{target}/cancel")
-                wait(api, target)
-                jobs = throughput(api, args.jobs)
-        finally:
-            stack.stop()
+    with temporary_stack() as stack, httpx.Client(base_url=stack.url, timeout=30) as api:
+        latency = queue_latency(api, args.rounds)
+        target = submit(api, scene("under-load", end=args.seconds * 100))
+        wait(api, target, ("running",))
+        load = asyncio.run(status_load(stack.url, target, args.rate, args.seconds))
+        api.post(f"/v1/jobs/{target}/cancel")
+        wait(api, target)
+        jobs = throughput(api, args.jobs)
 
     ms = lambda seconds: f"{seconds * 1000:.0f} ms"  # noqa: E731
     lat = load["latencies"]

@@ -22,7 +22,6 @@ import asyncio
 import json
 import importlib.util
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -222,12 +221,8 @@ def main() -> int:
     parser.add_argument("--kill-every", type=float, default=60.0, help="seconds between worker kills")
     parser.add_argument("--job-seconds", type=float, default=1.0, help="simulated time of each job (dt 1e-3)")
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory(prefix="mpm-soak-") as tmp:
-        stack = SoakStack(Path(tmp))
-        try:
-            result = soak(stack, args.minutes, args.jobs, args.rate, args.kill_every, args.job_seconds)
-        finally:
-            stack.stop()
+    with _bench.temporary_stack(SoakStack, prefix="mpm-soak-") as stack:
+        result = soak(stack, args.minutes, args.jobs, args.rate, args.kill_every, args.job_seconds)
     print(json.dumps(result), file=sys.stderr, flush=True)  # the figures, whatever the report does
     print(report(result))
     return 0 if result["lost"] == 0 and result["failed"] == 0 else 1
