@@ -5,33 +5,28 @@ and the periodic removal of results past their retention period."""
 from __future__ import annotations
 
 import logging
-import threading
 import time
 from typing import Callable
 
 import redis
 
 from core.store import HEARTBEAT_INTERVAL, JobStore
+from worker.background import BackgroundLoop
 
 log = logging.getLogger("mpm.worker")
 
 
-class Heartbeat:
+class Heartbeat(BackgroundLoop):
     def __init__(self, store: JobStore, worker: str, enqueue: Callable[[str], None],
                  sweep_every: float, retain: Callable[[], object] | None = None,
                  retain_every: float = 3600.0):
         self.store, self.worker, self.enqueue = store, worker, enqueue
         self.sweep_every = sweep_every
         self.retain, self.retain_every = retain, retain_every
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._beat, name="mpm-heartbeat", daemon=True)
-
-    def start(self) -> None:
-        self._thread.start()
+        super().__init__(self._beat, "mpm-heartbeat", join_timeout=HEARTBEAT_INTERVAL + 1)
 
     def stop(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=HEARTBEAT_INTERVAL + 1)
+        super().stop()
         try:
             self.store.worker_gone(self.worker)
         except redis.RedisError:

@@ -9,7 +9,6 @@ import json
 import logging
 import socket
 import ssl
-import threading
 from typing import Any
 from urllib.parse import urlsplit
 
@@ -19,6 +18,7 @@ from core import sweeps, webhooks
 from core.models import now_iso
 from core.settings import Settings
 from core.store import WEBHOOKS, JobStore, sweep_key
+from worker.background import BackgroundLoop
 
 log = logging.getLogger("mpm.worker")
 
@@ -74,19 +74,11 @@ def post(url: str, body: bytes, headers: dict[str, str], settings: Settings) -> 
         connection.close()
 
 
-class WebhookSender:
+class WebhookSender(BackgroundLoop):
     def __init__(self, store: JobStore, settings: Settings, interval: float = 0.5):
         self.store, self.settings, self.interval = store, settings, interval
         self._claim = store.redis.register_script(_CLAIM)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._loop, name="mpm-webhooks", daemon=True)
-
-    def start(self) -> None:
-        self._thread.start()
-
-    def stop(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=webhooks.TIMEOUT_SECONDS + 1)
+        super().__init__(self._loop, "mpm-webhooks", join_timeout=webhooks.TIMEOUT_SECONDS + 1)
 
     def _loop(self) -> None:
         while not self._stop.is_set():
