@@ -245,3 +245,16 @@ def unstable(name: str = "unstable") -> dict[str, Any]:
     scene = two_disks(name, end=5.0, dt=0.05)
     scene["time"]["allow_unstable_dt"] = True   # validation refuses it otherwise (solver/stability.py)
     return scene
+
+
+def bar_1d(name: str, end: float, frames: int = 2, model: str = "linear_elastic",
+           particles_per_cell: int = 2) -> dict[str, Any]:
+    """An elastic bar on a 1D grid of 8 cells, moving at 0.1 m/s: the smallest job there is
+    (thousands of its 1 ms steps a second here)."""
+    return {"version": 1, "name": name, "dimension": 1,
+            "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},
+            "materials": {"m": {"model": model, "density": 1000.0, "youngs_modulus": 1000.0,
+                                "poisson_ratio": 0.3}},
+            "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25], "upper": [0.75]},
+                        "particles_per_cell": particles_per_cell, "initial_velocity": [0.1]}],
+            "time": {"end": end, "dt": 0.001}, "output": {"frames": frames}}

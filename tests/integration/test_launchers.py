@@ -15,15 +15,10 @@ from celery.exceptions import Reject
 from core.models import new_job
 from core.paths import JobFiles, new_job_id
 from core.settings import get_settings
+from service_support import bar_1d
 from worker import slurm, tasks
 
-SCENE = {"version": 1, "name": "launcher", "dimension": 1,
-         "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},
-         "materials": {"m": {"model": "linear_elastic", "density": 1000.0, "youngs_modulus": 1000.0,
-                             "poisson_ratio": 0.3}},
-         "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25], "upper": [0.75]},
-                     "particles_per_cell": 2, "initial_velocity": [0.1]}],
-         "time": {"end": 0.02, "dt": 0.001}, "output": {"frames": 2}}
+SCENE = bar_1d("launcher", end=0.02)
 
 
 @pytest.fixture

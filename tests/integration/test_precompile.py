@@ -5,15 +5,10 @@ import subprocess
 import sys
 
 from solver import precompile
+from service_support import bar_1d
 from solver.scene_checks import load_scene
 
-SCENE = {"version": 1, "name": "helper", "dimension": 1, "method": {"scheme": "musl"},
-         "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},
-         "materials": {"m": {"model": "neo_hookean", "density": 1000.0, "youngs_modulus": 1000.0,
-                             "poisson_ratio": 0.3}},
-         "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25], "upper": [0.75]},
-                     "particles_per_cell": 3, "initial_velocity": [0.1]}],
-         "time": {"end": 0.005, "dt": 0.001}, "output": {"frames": 2}}
+SCENE = {**bar_1d("helper", end=0.005, model="neo_hookean", particles_per_cell=3), "method": {"scheme": "musl"}}
 
 
 def test_the_coarse_copy_keeps_the_scene_but_its_particle_counts():

@@ -21,7 +21,7 @@ import pytest
 
 from core.paths import JobFiles
 from service.embedded_redis import EmbeddedRedis
-from service_support import Stack, processes_with, wait_for_status, wait_until
+from service_support import Stack, bar_1d, processes_with, wait_for_status, wait_until
 from tests.slurm_cluster import SlurmCluster
 from solver.checkpoint import checkpoint_path
 from solver.results import read_frame
@@ -30,14 +30,8 @@ from tests.same_result import assert_same_result
 
 def tiny_1d(name: str, end: float) -> dict:
     """8 particles between two slip walls: about 5000 steps (of 1 ms) a second here."""
-    return {"version": 1, "name": name, "dimension": 1,
-            "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.125},
-            "materials": {"m": {"model": "linear_elastic", "density": 1000.0, "youngs_modulus": 1000.0,
-                                "poisson_ratio": 0.3}},
-            "bodies": [{"name": "b", "material": "m", "geometry": {"type": "box", "lower": [0.25], "upper": [0.75]},
-                        "particles_per_cell": 2, "initial_velocity": [0.1]}],
-            "boundary_conditions": [{"type": "wall", "face": face, "mode": "slip"} for face in ("x-", "x+")],
-            "time": {"end": end, "dt": 0.001}, "output": {"frames": 3}}
+    return {**bar_1d(name, end, frames=3),
+            "boundary_conditions": [{"type": "wall", "face": face, "mode": "slip"} for face in ("x-", "x+")]}
 
 
 class SlurmStack(Stack):
