@@ -1479,8 +1479,8 @@ def _message(error: dict) -> str:
     return message.replace("Input should be", "must be")
 
 
-# `from solver.scene import load_scene, Limits, MACHINE_LIMITS` is how users (docs/scene.md) and
-# scripts load a scene; those names live in solver/scene_checks.py, above this module, and are
+# `from solver.scene import load_scene, Limits, MACHINE_LIMITS` is how users and
+# scripts have loaded a scene since the first wave; those names live in solver/scene_checks.py, above this module, and are
 # found there only when asked for (PEP 562), so that importing the schema imports no checks.
 _CHECKS = ("load_scene", "Limits", "MACHINE_LIMITS", "COUNT_FACTOR")
 
