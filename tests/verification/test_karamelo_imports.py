@@ -1,5 +1,6 @@
 """Karamelo's examples imported (issue 50) against their references: the cantilever's tip
-against Timoshenko's beam, the vortex against its exact solution.
+against Timoshenko's beam, the vortex against its exact solution, the bouncing balls against
+free flight and symmetry, the dam break's front against Martin and Moyce.
 
 The cantilever (tests/data/karamelo/, TLMPM, neo-Hookean, E = 1e6, nu = 0.3, 4 x 1, a tip
 force of -100 per unit depth applied at once) swings about its static deflection with a
@@ -12,9 +13,12 @@ with cells halved (its N = 10 for 5): the error against the exact displacement f
 from 12.4 % to 5.8 % at t = 0.25 (measured; bounds a little above those). The file starts
 at rest where the exact solution moves at pi h(r) (-y, x); with that initial velocity the
 halved cells give 4.5 %.
+
+The bouncing balls and the dam break: their tests say what is exact and what is measured.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +27,8 @@ import pytest
 from solver.karamelo import translate
 from solver.runner import make_simulation
 from solver.scene_checks import load_scene
+from solver.stepper import Instability
+from test_dam_break import G, L0, MARTIN_MOYCE_T, MARTIN_MOYCE_Z, WALL, ritter
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "karamelo"
 
@@ -69,3 +75,107 @@ def vortex_error(cells: int, until: float) -> float:
 def test_the_imported_vortex_converges_to_its_exact_solution():
     coarse, fine = vortex_error(5, 0.25), vortex_error(10, 0.25)
     assert coarse < 0.14 and fine < 0.065 and coarse / fine > 1.9   # measured: 0.124, 0.058 (2.1x)
+
+
+def nodes_of(x, lower, h):
+    """The nodes a particle set reaches with linear shape functions: its cells' corners."""
+    cells = np.floor((x - lower) / h).astype(int)
+    return {tuple(c + corner) for c in cells for corner in np.ndindex(*(2,) * x.shape[1])}
+
+
+@pytest.mark.slow
+def test_the_imported_bouncing_balls_fly_free_meet_symmetrically_and_rebound():
+    """Two equal linear-elastic disks at +-(0.1, 0.1) m/s, no walls, no gravity, to 3.5 s.
+    Exact: the total momentum stays 0 and the motion point-symmetric (ball 2 = -ball 1: the
+    file, its seeding and the grid are symmetric about 0), to round-off; each ball flies free
+    (centre of mass c0 + v0 t, no strain energy) until the two first reach a common node, and
+    flies free again after the last. Not exact: the rebound. Elastic disks at v / c = 0.003
+    would keep e = 1; MPM's grid contact sticks while the balls share nodes (measured
+    e = 0.9943, with flip_ratio 1.0 0.9947: the loss is the contact's, not the FLIP blend's),
+    bound 0.99; the energy left after it is the centre-of-mass motion's, e^2 E0 (measured
+    within 0.02 %), bound 0.1 %."""
+    scene = load_scene(translate((DATA / "Bouncing_balls__ULMPM__bouncing_balls.mpm").read_text()).scene)
+    sim = make_simulation(scene)
+    p, lower, h = sim.particles, np.asarray(scene.grid.lower), scene.grid.cell_size
+    balls, m = [p.body == 0, p.body == 1], p.mass
+
+    def state():
+        e = sim.energies().values
+        return {"com": [(m[b, None] * p.x[b]).sum(0) / m[b].sum() for b in balls],
+                "v": [(m[b, None] * p.v[b]).sum(0) / m[b].sum() for b in balls],
+                "momentum": (m[:, None] * p.v).sum(0), "kinetic": e["kinetic_energy"], "strain": e["strain_energy"]}
+
+    start, t, rows = state(), 0.0, []
+    while t < scene.time.end:
+        dt = sim.stable_time_step(scene.time.cfl)
+        shared = bool(nodes_of(p.x[balls[0]], lower, h) & nodes_of(p.x[balls[1]], lower, h))
+        sim.advance(dt)
+        t += dt
+        rows.append((t, shared, state()))
+    touching = [k for k, (_, shared, _) in enumerate(rows) if shared]
+    assert touching and touching[-1] < len(rows) - 10          # they meet, and part before the end
+    first, last = touching[0], touching[-1]
+    momentum = float(np.hypot(*(start["v"][0] * m[balls[0]].sum())))
+    energy0 = start["kinetic"]
+    for t, _, s in rows:
+        assert np.abs(s["momentum"]).max() <= 1e-12 * momentum
+        assert np.abs(s["com"][0] + s["com"][1]).max() <= 1e-12
+    for t, _, s in rows[:first]:
+        assert np.abs(s["com"][0] - start["com"][0] - start["v"][0] * t).max() <= 1e-12
+        assert s["strain"] <= 1e-20 * energy0 and s["kinetic"] == pytest.approx(energy0, rel=1e-12)
+    assert rows[first][2]["strain"] > 1e-10 * energy0          # the step they share a node, they push
+    after = [s["v"][0] for _, _, s in rows[last + 1:]]
+    assert np.ptp(after, axis=0).max() <= 1e-12 * 0.1          # free again: constant velocity
+    e = -after[-1] / start["v"][0]
+    assert e[0] == pytest.approx(e[1], rel=1e-12) and 0.99 <= e[0] <= 1.0
+    final = rows[-1][2]
+    assert final["kinetic"] + final["strain"] == pytest.approx(e[0] ** 2 * energy0, rel=1e-3)
+
+
+def dam_break_front(text: str):
+    """(T, L) of the imported dam break at every step, Karamelo's eq. 4.6 as in test_dam_break
+    (front = the farthest particle, from where it starts), and the error that ended the run."""
+    scene = load_scene(translate(text).scene)
+    sim = make_simulation(scene)
+    start, t, rows, stop = sim.particles.x[:, 0].max(), 0.0, [], None
+    try:
+        while t < scene.time.end:
+            dt = sim.stable_time_step(scene.time.cfl)
+            sim.advance(dt)
+            t += dt
+            rows.append((t * math.sqrt(G * L0 / L0**2), 1.0 + (sim.particles.x[:, 0].max() - start) / L0))
+    except Instability as error:
+        stop = error
+    return np.array(rows), stop
+
+
+def lag_behind_martin_moyce(rows) -> np.ndarray:
+    """How much later (in T) the front reaches each L than the experiment did, over the
+    experiment's range of L and before the far end (L = 1.61 / 0.6)."""
+    T, L = rows.T
+    seen = (L >= MARTIN_MOYCE_Z[0]) & (L <= min(MARTIN_MOYCE_Z[-1], WALL - 0.05))
+    return T[seen] - np.interp(L[seen], MARTIN_MOYCE_Z, MARTIN_MOYCE_T / math.sqrt(2.0))
+
+
+@pytest.mark.slow
+def test_the_imported_dam_break_front_against_martin_and_moyce():
+    """The file (0.6 x 0.6 water column, 40 cells across 1.61 m, 2 x 2 per cell, Tait K = 360 Pa)
+    has no wall on the right: its run ends when the surge reaches the grid's end, x = 1.61,
+    at t = 0.44 of its 0.5 s (Karamelo does not check that its particles stay in the domain;
+    the scene stops them). Its water is soft: rho g h0 = 5.9 kPa is 16 K, so the column first
+    sinks to about 0.37 m and the front lags the experiment, by up to dT = 0.19 (measured;
+    bound 0.25). The same file with K = 360 kPa (c = 50 m/s, ten times the flow, [R] 5.4.1)
+    follows Martin and Moyce: within dT = 0.1 (the experiment's time origin, as in
+    test_dam_break) plus 0.05 (one cell, h / l0 = 0.067, at the front's mean speed over the range, dL/dT = 1.3)
+    either way (measured -0.117 ... +0.066). Both stay below Ritter's 1 + 2T."""
+    text = (DATA / "Dam-break__water-dam.mpm").read_text()
+    soft, stop = dam_break_front(text)
+    assert stop is not None and stop.quantity == "position" and "left the grid" in stop.detail
+    assert soft[-1, 1] >= WALL - 0.05                             # it is the front that left
+    stiff, _ = dam_break_front(text.replace("K     = 0.36*1000\n", "K     = 0.36*1000*1000\n"))
+    for rows in (soft, stiff):
+        assert np.all(rows[:, 1] <= ritter(rows[:, 0]))
+    soft_lag, stiff_lag = lag_behind_martin_moyce(soft), lag_behind_martin_moyce(stiff)
+    assert len(soft_lag) > 20 and len(stiff_lag) > 100
+    assert 0.0 < soft_lag.min() and soft_lag.max() <= 0.25
+    assert np.abs(stiff_lag).max() <= 0.1 + 0.05
