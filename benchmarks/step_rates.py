@@ -29,7 +29,10 @@ ROOT = Path(__file__).resolve().parent.parent
 MEASURE = r"""
 import json, sys, time
 sys.path.insert(0, ".")
-from solver.scene_checks import load_scene
+try:
+    from solver.scene_checks import load_scene
+except ImportError:   # a commit before the checks left solver/scene.py
+    from solver.scene import load_scene
 try:
     from solver.runner import make_simulation
 except ImportError:
