@@ -3,6 +3,7 @@
     python benchmarks/startup.py                         # the default examples, cold then warm
     python benchmarks/startup.py --examples two_disks elastic_cube_3d --json startup.json
     python benchmarks/startup.py --all                   # every example (long: each compiles from empty)
+    python benchmarks/startup.py --all --first-steps     # every example's cold first step only
 
 For each example, in a kernel cache of its own that starts empty (MPM_CACHE_DIR, solver/
 kernel_cache.py), the example runs twice as `mpm run` does (`python -m solver run ...
@@ -71,6 +72,34 @@ def _follow(process: subprocess.Popen, launched: float) -> dict:
     return {"first_step_s": first_step, "wall_s": wall, "compiled": done["compiled"],
             "compile_s": done["compile_seconds"], "estimate_s": estimate,
             "wall_over_estimate": wall / estimate if estimate else None}
+
+
+def cold_first_step(name: str, cache: Path, out: Path) -> float:
+    """Seconds from launch to the first step of the example's own file (its mesh files beside it)
+    in an empty cache; the run and its precompile helper are stopped there (one process group)."""
+    env = dict(os.environ, MPM_CACHE_DIR=str(cache))
+    command = [sys.executable, "-m", "solver", "run", str(ROOT / "examples" / f"{name}.json"), "-o", str(out / name),
+               "--progress", "json"]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                               env=env, start_new_session=True)
+    launched = time.perf_counter()
+    try:
+        for line in process.stdout:
+            if line.startswith("{") and json.loads(line).get("stage") == "stepping":
+                return time.perf_counter() - launched
+        raise RuntimeError(f"{name}: ended (exit {process.wait()}) before its first step")
+    finally:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+
+
+def first_steps(names: list[str], tmp: Path) -> list[dict]:
+    rows = []
+    for name in names:
+        seconds = cold_first_step(name, tmp / f"cache-{name}", tmp / "first")
+        rows.append({"example": name, "cold_first_step_s": seconds})
+        print(f"{name:28s} cold: first step {seconds:6.1f} s", flush=True)
+    return rows
 
 
 def run(name: str, cache: Path, out: Path) -> dict:
@@ -163,8 +192,16 @@ def main() -> int:
     parser.add_argument("--all", action="store_true", help="every example")
     parser.add_argument("--json", type=Path, help="write the figures here")
     parser.add_argument("--no-cold", action="store_true", help="only the processes at once and mpm serve")
+    parser.add_argument("--first-steps", action="store_true",
+                        help="only each example's cold first step (stopped there; with --all: every example)")
     args = parser.parse_args()
-    names = list_examples() if args.all else args.examples
+    names = [e["name"] for e in list_examples()] if args.all else args.examples
+    if args.first_steps:
+        with tempfile.TemporaryDirectory(prefix="mpm-startup-") as tmp:
+            rows = first_steps(names, Path(tmp))
+        if args.json:
+            args.json.write_text(json.dumps(rows, indent=1))
+        return 0
     rows = []
     with tempfile.TemporaryDirectory(prefix="mpm-startup-") as tmp:
         tmp = Path(tmp)
