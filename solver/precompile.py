@@ -123,7 +123,10 @@ def main(path: str) -> int:
     from solver.stepper import ExplicitMPM
 
     try:
-        scene = load_scene(json.loads(open(path).read()))
+        # A mesh or points file is named by the absolute path the run resolved when it validated
+        # the scene; read without a folder, a document naming a file is refused (the service's
+        # rule), and the helper died on every such scene, leaving the run to compile alone.
+        scene = load_scene(json.loads(open(path).read()), files=os.path.dirname(path))
     finally:
         os.unlink(path)
     sim = ExplicitMPM(scene)

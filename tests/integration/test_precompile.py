@@ -66,3 +66,23 @@ def test_no_helper_when_no_core_is_idle_now(monkeypatch):
 
 def test_the_idle_cores_read_from_the_machine_are_within_its_cores():
     assert 0.0 <= precompile.idle_cores() <= (os.cpu_count() or 1) + 1e-9
+
+
+def test_the_helper_reads_a_scene_that_names_a_file(tmp_path, monkeypatch):
+    """A scene's mesh or points file is named by its absolute path once the run has validated
+    it (the copy the helper gets): the helper reads it and builds the run's simulation."""
+    (tmp_path / "cloud.csv").write_text("x,y,volume\n0.42,0.42,0.0025\n0.47,0.42,0.0025\n0.42,0.47,0.0025\n")
+    scene = {"dimension": 2, "grid": {"lower": [0, 0], "upper": [1, 1], "cell_size": 0.1},
+             "materials": {"m": {"model": "linear_elastic", "density": 1000, "youngs_modulus": 1e6,
+                                 "poisson_ratio": 0.3}},
+             "bodies": [{"name": "cloud", "material": "m", "geometry": {"type": "points", "file": "cloud.csv"}}],
+             "time": {"end": 0.01}}
+    (tmp_path / "scene.json").write_text(json.dumps(scene))
+    validated = load_scene(tmp_path / "scene.json")
+    copy = tmp_path / "helper" / "coarse.json"   # (precompile.start writes it to a temporary folder)
+    copy.parent.mkdir()
+    copy.write_text(json.dumps(precompile.coarse(validated.model_dump(mode="json", exclude_unset=True))))
+    built = []
+    monkeypatch.setattr(precompile, "compile_backwards", lambda sim, dt: built.append(sim.particles.count))
+    assert precompile.main(str(copy)) == 0 and built == [3]
+
