@@ -29,10 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 MEASURE = r"""
 import json, sys, time
 sys.path.insert(0, ".")
-try:
-    from solver.scene_checks import load_scene
-except ImportError:   # a commit before the checks left solver/scene.py
-    from solver.scene import load_scene
+from solver.scene import load_scene   # (in later commits an alias of solver.scene_checks')
 try:
     from solver.runner import make_simulation
 except ImportError:
