@@ -192,6 +192,10 @@ def estimate_seconds(scene, particles_per_body: list[int], nodes: int, steps: in
 
 # Compile time of a variant when the model has no figure for its kind (a 2D elastic step, measured).
 DEFAULT_COMPILE_SECONDS = 30.0
+# A run on one thread compiles the kernels' serial twins (solver/jit.py): about this share
+# of the model's figures, which are the parallel forms' (docs/internals.md, "One thread,
+# serial twins": the twins' compile time over the parallel forms', cold, per example).
+ONE_THREAD_COMPILE = 0.36
 # Parts of a scene that change no kernel: names, labels, output and timing.
 _NOT_COMPILED = {"name", "material", "units", "output", "time", "version"}
 
@@ -208,27 +212,29 @@ def _structure(value):
     return "#"
 
 
-def variant(scene) -> str:
-    """A digest of what decides the kernels a run of `scene` compiles."""
+def variant(scene, threads: int) -> str:
+    """A digest of what decides the kernels a run of `scene` on `threads` threads a process
+    compiles (one thread: the serial twins, solver/jit.py)."""
     data = scene.model_dump(mode="json")
     data["materials"] = list(data["materials"].values())   # their names are the user's
-    data["parallel"] = {"processes": min(scene.parallel.processes, 2)}   # one or several: MPI's kernels
+    data["parallel"] = {"processes": min(scene.parallel.processes, 2),   # one or several: MPI's kernels
+                        "one_thread": threads == 1}
     data["backend"] = backend_name(scene)
     return hashlib.sha256(json.dumps(_structure(data), sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _compiled_marker(scene) -> Path:
-    return kernel_cache.version_folder() / "compiled" / f"{variant(scene)}.json"
+def _compiled_marker(scene, threads: int) -> Path:
+    return kernel_cache.version_folder() / "compiled" / f"{variant(scene, threads)}.json"
 
 
-def is_compiled(scene) -> bool:
+def is_compiled(scene, threads: int) -> bool:
     """Whether a run of this variant compiled its kernels into this version's cache."""
-    return _compiled_marker(scene).exists()
+    return _compiled_marker(scene, threads).exists()
 
 
-def mark_compiled(scene, seconds: float, count: int) -> None:
+def mark_compiled(scene, threads: int, seconds: float, count: int) -> None:
     """Record that this variant's kernels are in the cache (after a run's first step)."""
-    marker = _compiled_marker(scene)
+    marker = _compiled_marker(scene, threads)
     try:
         marker.parent.mkdir(parents=True, exist_ok=True)
         temporary = marker.with_name(f".{marker.name}.{os.getpid()}")
@@ -238,14 +244,16 @@ def mark_compiled(scene, seconds: float, count: int) -> None:
         pass   # a read-only cache: later estimates count the compilation again, nothing worse
 
 
-def compile_seconds(scene, model: CostModel | None = None) -> float:
-    """Wall time the run will spend compiling: 0 for a variant compiled before, else the
-    model's figure for the scene's kind plus what its materials' models add."""
-    if is_compiled(scene):
+def compile_seconds(scene, threads: int, model: CostModel | None = None) -> float:
+    """Wall time a run on `threads` threads a process will spend compiling: 0 for a variant
+    compiled before, else the model's figure for the scene's kind plus what its materials'
+    models add (a share of it on one thread)."""
+    if is_compiled(scene, threads):
         return 0.0
     model = model or load_model()
     # `mpm calibrate` measures steps, not compilation: a calibration takes the shipped figures
     table, dim = model.compile_seconds or _read(str(SHIPPED), SHIPPED.stat().st_mtime).compile_seconds, scene.dimension
     seconds = table.get(f"{dim}/{backend_name(scene)}", DEFAULT_COMPILE_SECONDS)
     models = {material.model for material in scene.materials.values()}
-    return seconds + sum(table.get(f"{dim}/{name}", 0.0) for name in models)
+    parallel_forms = seconds + sum(table.get(f"{dim}/{name}", 0.0) for name in models)
+    return parallel_forms * (ONE_THREAD_COMPILE if threads == 1 else 1.0)

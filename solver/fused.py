@@ -130,14 +130,15 @@ def _quadratic(f):
     return 0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2
 
 
-@njit(cache=True)
+# twin=True: a run on one thread calls the copies' serial twin through them (solver/jit.py).
+@njit(twin=True, cache=True)
 def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force):
     if copies_mass.shape[0] > 0:
         add_copies(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
 
-@njit(cache=True)
+@njit(twin=True, cache=True)
 def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
     """`_reduce` of a P2G that folded the force into the momentum (no force copies to add); also
     the REMAP pass's with conduction, its remapped m c T in the place of the mass."""
@@ -166,7 +167,7 @@ def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
             _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, 3)
 
 
-@njit(cache=True)
+@njit(twin=True, cache=True)
 def _reduce_with(grid_mass, grid_mom, grid_force, extra, more, copies_mass, copies_mom, copies_force, copies_extra,
                  copies_more):
     """`_reduce` of a P2G that scattered two more nodal arrays, (n, k) each (conduction: the heat and

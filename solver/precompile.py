@@ -30,11 +30,11 @@ IDLE_CORE = 0.75
 IDLE_WINDOW = 0.2
 
 
-def wanted(scene) -> bool:
+def wanted(scene, threads: int) -> bool:
     """A cold, single-process run on a machine with a core to spare."""
     if os.environ.get("MPM_PRECOMPILE", "1") == "0" or scene.parallel.processes > 1:
         return False
-    if available_cores() < 2 or cost.is_compiled(scene):
+    if available_cores() < 2 or cost.is_compiled(scene, threads):
         return False
     return idle_cores() >= IDLE_CORE
 
@@ -59,23 +59,25 @@ def _cpu_ticks() -> tuple[int, int]:
     return ticks[3] + ticks[4], sum(ticks)
 
 
-def coarse(document: dict) -> dict:
-    """The scene with one particle per cell in every body: fewer particles, the same kernels."""
+def coarse(document: dict, threads: int) -> dict:
+    """The scene with one particle per cell in every body: fewer particles, the same kernels
+    (on the run's thread count, which decides the kernels' forms: solver/jit.py)."""
     bodies = []
     for body in document["bodies"]:
         ppc = body.get("particles_per_cell")
         bodies.append({**body, "particles_per_cell": [1] * len(ppc) if isinstance(ppc, list) else 1}
                       if ppc is not None else body)
-    return {**document, "bodies": bodies}
+    return {**document, "bodies": bodies, "parallel": {**document.get("parallel", {}), "threads": threads}}
 
 
-def start(scene) -> subprocess.Popen | None:
-    """The helper process for `scene`, or None when it is not wanted or cannot start."""
-    if not wanted(scene):
+def start(scene, threads: int) -> subprocess.Popen | None:
+    """The helper process for a run of `scene` on `threads` threads, or None when it is not
+    wanted or cannot start."""
+    if not wanted(scene, threads):
         return None
     try:
         with tempfile.NamedTemporaryFile("w", suffix=".json", prefix="mpm-precompile-", delete=False) as file:
-            json.dump(coarse(scene.model_dump(mode="json", exclude_unset=True)), file)
+            json.dump(coarse(scene.model_dump(mode="json", exclude_unset=True), threads), file)
         return subprocess.Popen([sys.executable, "-m", "solver.precompile", file.name],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:

@@ -132,14 +132,16 @@ def run(
     started = wallclock.perf_counter()
     with _Compiling(scene, started, progress) as compiling:
         result = _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds)
-    if compiling.meter.count or not cost.is_compiled(scene):   # kernels compiled after the first step too
-        cost.mark_compiled(scene, compiling.meter.seconds, compiling.meter.count)
+    if compiling.threads and (compiling.meter.count or not cost.is_compiled(scene, compiling.threads)):
+        cost.mark_compiled(scene, compiling.threads, compiling.meter.seconds, compiling.meter.count)
     result.compiled, result.compile_seconds = compiling.meter.count, round(compiling.meter.seconds, 3)
     return result
 
 
 def _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds) -> Result:
-    loop = _TimeLoop(scene, make_simulation(scene), started, progress, should_stop)
+    sim = make_simulation(scene)
+    compiling.start_helper(sim.threads)
+    loop = _TimeLoop(scene, sim, started, progress, should_stop)
     loop.compiling = compiling
     restart = checkpoint.resume(loop.sim, out_dir) if resume else None
     if restart is not None:
@@ -303,7 +305,8 @@ class _Compiling:
     """The run's first stage: numba loads or compiles the kernels until the first step is done.
 
     Counts the compilations (Result.compiled) and, for a cold variant, starts the helper
-    that compiles the step from its other end (solver/precompile.py). With a progress
+    that compiles the step from its other end (solver/precompile.py) once the simulation
+    knows its thread count, which decides the kernels' forms (solver/jit.py). With a progress
     callback, a thread reports stage "compiling" every REPORT_S with an ETA of the
     compilation left (the cost model's figure, solver/cost.py) plus the run's estimate,
     since the main thread is in the compiler and reports nothing. After the first step the
@@ -315,16 +318,20 @@ class _Compiling:
         self.scene, self.started, self.progress = scene, started, progress
         self.meter = CompileMeter()
         self.helper = None
+        self.threads = 0   # the simulation's, once it is built
         self.active = True
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._report, daemon=True) if progress is not None else None
 
     def __enter__(self) -> "_Compiling":
         self.meter.__enter__()
-        self.helper = precompile.start(self.scene)   # a cold variant on a machine with a core to spare
         if self._thread is not None:
             self._thread.start()
         return self
+
+    def start_helper(self, threads: int) -> None:
+        self.threads = threads
+        self.helper = precompile.start(self.scene, threads)   # a cold variant on a machine with a core to spare
 
     def __exit__(self, *exc) -> None:
         self.done()
@@ -338,8 +345,8 @@ class _Compiling:
         self._stop.set()
         if self._thread is not None:
             self._thread.join()
-        if self.meter.count:
-            cost.mark_compiled(self.scene, self.meter.seconds, self.meter.count)
+        if self.meter.count and self.threads:
+            cost.mark_compiled(self.scene, self.threads, self.meter.seconds, self.meter.count)
 
     def _report(self) -> None:
         from solver.summary import summarize   # counts the particles: here, beside the compiler

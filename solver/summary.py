@@ -47,7 +47,7 @@ def summarize(scene: Scene) -> Summary:
     nodes = math.prod(n + 1 for n in shape)
     dt = time_step(scene)
     steps = estimate_steps(scene)
-    compiling = cost.compile_seconds(scene)
+    compiling = cost.compile_seconds(scene, cost.planned_threads(scene, particles))
     return Summary(
         particles=particles,
         particles_per_body=per_body,

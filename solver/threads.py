@@ -36,7 +36,7 @@ if "OMP_WAIT_POLICY" not in os.environ:
 
 import numba  # noqa: E402  (after the policy: OpenMP reads it when numba first starts its threads)
 import numpy as np  # noqa: E402
-from solver.jit import njit  # noqa: E402
+from solver.jit import njit, use_threads  # noqa: E402
 
 from solver.thread_count import PARTICLES_PER_THREAD, available_cores, requested_threads  # noqa: E402,F401
 
@@ -50,6 +50,7 @@ def configure(scene, particles: int) -> int:
     (NUMBA_NUM_THREADS, by default the cores it sees): a request beyond it is capped there."""
     threads = max(1, min(requested_threads(scene, particles), numba.config.NUMBA_NUM_THREADS))
     numba.set_num_threads(threads)
+    use_threads(threads)
     return threads
 
 

@@ -33,9 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="skip compiling the solver kernels at start")
 
 
-def _warm_up_behind(name: str) -> None:
+def _warm_up_behind(name: str, settings) -> None:
     """The warm-up in a thread: the worker is ready (heartbeat, jobs) while it compiles."""
-    from worker.tasks import get_store
+    from worker.tasks import get_store, job_environment
 
     def warming(flag: bool) -> None:
         try:
@@ -43,7 +43,10 @@ def _warm_up_behind(name: str) -> None:
         except redis.RedisError as exc:
             log.warning("warm-up state not recorded: %s", exc, extra={"worker": name})
 
-    threading.Thread(target=warm_up, kwargs={"warming": warming}, name="mpm-warmup", daemon=True).start()
+    cores = job_environment(settings)["MPM_CORES"]
+    job_cores = int(cores) if cores.isdigit() else 1
+    threading.Thread(target=warm_up, kwargs={"warming": warming, "job_cores": job_cores}, name="mpm-warmup",
+                     daemon=True).start()
 
 
 def worker_command(args: argparse.Namespace) -> int:
@@ -68,7 +71,7 @@ def worker_command(args: argparse.Namespace) -> int:
         heartbeat.start()
         sender.start()
         if warm:
-            _warm_up_behind(name)
+            _warm_up_behind(name, settings)
 
     worker_ready.connect(on_ready, weak=False)
     worker_shutdown.connect(lambda **_: (heartbeat.stop(), sender.stop()), weak=False)

@@ -152,7 +152,7 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
         outcome = launcher.run(
             job_id, files, job.get("processes", 1), job.get("nodes") or 1,
             on_progress=on_progress, should_stop=should_stop, progress_interval=settings.progress_interval,
-            timeout_seconds=settings.max_job_seconds, env=_job_environment(settings))
+            timeout_seconds=settings.max_job_seconds, env=job_environment(settings))
         if not _killed(outcome):
             break
         lost += 1
@@ -202,7 +202,7 @@ def _retry_redis(call, seconds: float = 300.0):
 
 
 
-def _job_environment(settings: Settings) -> dict[str, str]:
+def job_environment(settings: Settings) -> dict[str, str]:
     """The solver's environment: each of the jobs this worker runs at once gets its share
     of the cores for its threads (MPM_CORES, solver/threads.py), unless the operator set
     it (several workers on one machine)."""

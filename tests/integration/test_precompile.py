@@ -11,10 +11,11 @@ from solver.scene_checks import load_scene
 SCENE = {**bar_1d("helper", end=0.005, model="neo_hookean", particles_per_cell=3), "method": {"scheme": "musl"}}
 
 
-def test_the_coarse_copy_keeps_the_scene_but_its_particle_counts():
-    coarse = precompile.coarse(SCENE)
+def test_the_coarse_copy_keeps_the_scene_but_its_particle_counts_and_runs_on_the_run_s_threads():
+    coarse = precompile.coarse(SCENE, 2)
     assert coarse["bodies"][0]["particles_per_cell"] == 1
-    assert {**coarse, "bodies": SCENE["bodies"]} == SCENE
+    assert coarse["parallel"] == {"threads": 2}   # fewer particles would take fewer: other kernels
+    assert {**coarse, "bodies": SCENE["bodies"], "parallel": SCENE.get("parallel", {})} == {**SCENE, "parallel": {}}
     assert load_scene(coarse).dimension == 1
 
 
@@ -23,7 +24,7 @@ def test_after_the_helper_a_run_compiles_almost_nothing(tmp_path):
     after it compiles only what lies outside the step (the output and the energy checks)."""
     env = dict(os.environ, MPM_CACHE_DIR=str(tmp_path / "cache"), MPM_PRECOMPILE="0")
     helper_scene = tmp_path / "coarse.json"
-    helper_scene.write_text(json.dumps(precompile.coarse(SCENE)))
+    helper_scene.write_text(json.dumps(precompile.coarse(SCENE, 1)))   # the run's threads: 1 for so few particles
     subprocess.run([sys.executable, "-m", "solver.precompile", str(helper_scene)], env=env, check=True, timeout=600)
     assert not helper_scene.exists()   # the helper removes its copy
     scene = tmp_path / "scene.json"
@@ -48,7 +49,7 @@ def _machine(monkeypatch, idle_now: float, load_average: float, cores: int = 2):
     monkeypatch.setattr(os, "cpu_count", lambda: cores)
     monkeypatch.setattr(os, "getloadavg", lambda: (load_average,) * 3)
     monkeypatch.setattr(precompile, "available_cores", lambda: cores)
-    monkeypatch.setattr(precompile.cost, "is_compiled", lambda scene: False)
+    monkeypatch.setattr(precompile.cost, "is_compiled", lambda scene, threads: False)
     monkeypatch.delenv("MPM_PRECOMPILE", raising=False)
 
 
@@ -56,12 +57,12 @@ def test_a_run_right_after_a_busy_minute_gets_its_helper_when_a_core_is_idle_now
     """The load average trails by a minute: after a compile it says the machine is busy while a
     core sits idle (the gate used it, and back-to-back cold runs compiled alone)."""
     _machine(monkeypatch, idle_now=0.95, load_average=1.9)
-    assert precompile.wanted(load_scene(SCENE))
+    assert precompile.wanted(load_scene(SCENE), 1)
 
 
 def test_no_helper_when_no_core_is_idle_now(monkeypatch):
     _machine(monkeypatch, idle_now=0.3, load_average=0.2)
-    assert not precompile.wanted(load_scene(SCENE))
+    assert not precompile.wanted(load_scene(SCENE), 1)
 
 
 def test_the_idle_cores_read_from_the_machine_are_within_its_cores():
@@ -81,7 +82,7 @@ def test_the_helper_reads_a_scene_that_names_a_file(tmp_path, monkeypatch):
     validated = load_scene(tmp_path / "scene.json")
     copy = tmp_path / "helper" / "coarse.json"   # (precompile.start writes it to a temporary folder)
     copy.parent.mkdir()
-    copy.write_text(json.dumps(precompile.coarse(validated.model_dump(mode="json", exclude_unset=True))))
+    copy.write_text(json.dumps(precompile.coarse(validated.model_dump(mode="json", exclude_unset=True), 1)))
     built = []
     monkeypatch.setattr(precompile, "compile_backwards", lambda sim, dt: built.append(sim.particles.count))
     assert precompile.main(str(copy)) == 0 and built == [3]

@@ -81,15 +81,23 @@ def test_a_variant_is_the_scenes_structure_not_its_numbers_or_names():
     stiffer["materials"] = {"renamed": material}
     for body in stiffer["bodies"]:
         body["material"], body["name"] = "renamed", body["name"] + "!"
-    assert cost.variant(load_scene(scene)) == cost.variant(load_scene(stiffer))
+    assert cost.variant(load_scene(scene), 1) == cost.variant(load_scene(stiffer), 1)
     other = dict(scene, method={**scene["method"], "shape_function": "cubic_bspline"})
-    assert cost.variant(load_scene(other)) != cost.variant(load_scene(scene))
+    assert cost.variant(load_scene(other), 1) != cost.variant(load_scene(scene), 1)
+
+
+def test_a_run_on_one_thread_and_a_run_on_several_are_two_variants():
+    """They run different forms of the kernels (solver/jit.py); several threads, one form."""
+    scene = load_scene(EXAMPLES / "two_disks.json")
+    assert cost.variant(scene, 1) != cost.variant(scene, 2) == cost.variant(scene, 4)
 
 
 def test_the_estimate_counts_compiling_until_a_run_marks_the_variant(tmp_path, monkeypatch):
     monkeypatch.setattr(kernel_cache, "version_folder", lambda: tmp_path)
     scene = load_scene(EXAMPLES / "two_disks.json")
     model = cost.CostModel.model_validate({**cost.load_model().model_dump(), "compile_seconds": {"2/fused": 25.0}})
-    assert not cost.is_compiled(scene) and cost.compile_seconds(scene, model) == 25.0
-    cost.mark_compiled(scene, 24.0, 38)
-    assert cost.is_compiled(scene) and cost.compile_seconds(scene, model) == 0.0
+    assert not cost.is_compiled(scene, 2) and cost.compile_seconds(scene, 2, model) == 25.0
+    assert cost.compile_seconds(scene, 1, model) == 25.0 * cost.ONE_THREAD_COMPILE
+    cost.mark_compiled(scene, 2, 24.0, 38)
+    assert cost.is_compiled(scene, 2) and cost.compile_seconds(scene, 2, model) == 0.0
+    assert not cost.is_compiled(scene, 1)

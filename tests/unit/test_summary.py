@@ -53,7 +53,7 @@ def test_two_disk_memory_and_run_time():
     # the run time is the cost model's (tests/unit/test_cost.py), with the scene's counts
     # (and the compilation of its variant when this machine has not compiled it yet)
     expected = cost.estimate_seconds(load_scene(two_disks()), [208, 208], 441, 3500)
-    assert summary.estimated_compile_seconds == cost.compile_seconds(load_scene(two_disks()))
+    assert summary.estimated_compile_seconds == cost.compile_seconds(load_scene(two_disks()), threads)
     assert summary.estimated_run_seconds == pytest.approx(expected + summary.estimated_compile_seconds, rel=1e-12)
 
 
@@ -129,7 +129,7 @@ def test_3d_run_time_is_the_cost_models():
     }
     summary = summarize(load_scene(scene))
     assert summary.particles == 2 * 2 * 4 and summary.grid_nodes == 125
-    expected = cost.estimate_seconds(load_scene(scene), [16], 125, 100) + cost.compile_seconds(load_scene(scene))
+    expected = cost.estimate_seconds(load_scene(scene), [16], 125, 100) + cost.compile_seconds(load_scene(scene), 1)
     assert summary.estimated_run_seconds == pytest.approx(expected, rel=1e-12)
 
 
