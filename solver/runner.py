@@ -71,7 +71,13 @@ class Result:
 
 
 class _StopSignals:
-    """SIGTERM / SIGINT set a flag (when run() is in the main thread) so the step in flight finishes."""
+    """SIGTERM / SIGINT set a flag (when run() is in the main thread) so the step in flight finishes.
+
+    Once one has, the process ignores them to its end: a stop often comes twice (a Slurm
+    preemption signals every process of the job, MPI's launcher among them, which passes its
+    own on to the ranks), and a second one arriving after the run had written its checkpoint
+    killed a rank on its way out, so the job read as failed, not as stopped and resumable.
+    SIGKILL, which a stop that is not heeded leads to, still ends it."""
 
     def __init__(self):
         self.requested = False
@@ -88,7 +94,7 @@ class _StopSignals:
 
     def __exit__(self, *exc):
         for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
+            signal.signal(sig, signal.SIG_IGN if self.requested else handler)
 
 
 class _FrameSchedule:

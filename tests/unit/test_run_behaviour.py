@@ -169,3 +169,39 @@ def test_tlmpm_translates_a_free_body_rigidly_without_reference_body_forces(tmp_
     np.testing.assert_allclose(last["fields"]["velocity"], np.tile(velocity, (result.particles, 1)), atol=1e-12)
     np.testing.assert_allclose(last["fields"]["position"] - first["fields"]["position"],
                                np.tile(np.multiply(velocity, 0.05), (result.particles, 1)), atol=1e-12)
+
+
+_STOPPED_TWICE = """
+import json, os, signal, sys
+from solver import run
+def progress(info):
+    if info.stage == "stepping":
+        os.kill(os.getpid(), signal.SIGTERM)
+result = run(json.loads(sys.argv[1]), sys.argv[2], progress=progress)
+os.kill(os.getpid(), signal.SIGTERM)   # a stop's second signal, once the run has ended (Slurm, mpiexec)
+os.kill(os.getpid(), signal.SIGINT)
+print(result.reason, "and alive")
+"""
+
+
+def test_a_stopped_run_outlives_a_second_stop_signal(tmp_path):
+    """After a SIGTERM has stopped it, a run's process ignores more of them to its end: a second
+    one killed a rank on its way out after it had written its checkpoint, and the preempted
+    job read as failed."""
+    import json
+    import subprocess
+    import sys
+
+    scene = block(dim=1, time={"end": 100.0, "dt": 1e-3})
+    done = subprocess.run([sys.executable, "-c", _STOPPED_TWICE, json.dumps(scene), str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().endswith("cancelled and alive")
+
+
+def test_a_run_that_was_not_stopped_gives_the_signal_handlers_back(tmp_path):
+    import signal
+
+    before = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+    run(block(time={"end": 0.002, "dt": 1e-3}), tmp_path / "out")
+    assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before
