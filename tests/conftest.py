@@ -27,6 +27,14 @@ os.environ["MPM_PRECOMPILE"] = "0"
 # cold run is compiling). Runs contract by default; tests/unit/test_fused.py holds the
 # contracted kernels to these to round-off, and sets MPM_FMA where a test is about it.
 os.environ.setdefault("MPM_FMA", "0")
+# Each worker's share of the cores, as a service worker gives each job its share (worker/tasks.py):
+# a scene that names no thread count runs on one thread, in the kernels' serial twins, which
+# compile in about a third of the parallel forms' time (solver/jit.py); the tests about threads
+# name their counts and compile the parallel forms.
+if "MPM_CORES" not in os.environ:
+    from solver.thread_count import available_cores
+
+    os.environ["MPM_CORES"] = str(max(1, available_cores() // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
 
 SPREAD = {"unit/test_fused.py", "regression/test_regression.py"}
 

@@ -274,7 +274,8 @@ def test_a_tensor_shape_functions_weights_kernel_is_taken_from_numbas_cache_by_a
              "from solver.kernels import stencil_spec; spec = stencil_spec(2, 9)\n"
              "gimp.weights(spec, x, length, np.zeros(2), np.full(2, 10.0), np.array([10, 10]),\n"
              "             np.array([1, 11]), idx, w, dw, 1)\n"
-             "print(sum(tensor.kernels('gimp').weights.stats.cache_hits.values()))\n")
+             "weights = tensor.kernels('gimp').weights   # (a ThreadedKernel: either form counts)\n"
+             "print(sum(sum(form.stats.cache_hits.values()) for form in (weights.parallel, weights.serial)))\n")
     runs = [subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
             for _ in range(2)]
     for run in runs:
