@@ -75,9 +75,9 @@ class _StopSignals:
 
     Once one has, the process ignores them to its end: a stop often comes twice (a Slurm
     preemption signals every process of the job, MPI's launcher among them, which passes its
-    own on to the ranks), and a second one arriving after the run had written its checkpoint
-    killed a rank on its way out, so the job read as failed, not as stopped and resumable.
-    SIGKILL, which a stop that is not heeded leads to, still ends it."""
+    own on to the ranks), and a second one arriving after the run had restored the handlers
+    would kill the process on its way out, after its checkpoint. SIGKILL, which a stop that is
+    not heeded leads to, still ends it."""
 
     def __init__(self):
         self.requested = False
