@@ -12,11 +12,11 @@ import os
 PARTICLES_PER_THREAD = 4000
 
 
-def available_cores() -> int:
-    """The cores this run may use: MPM_CORES when set (a worker running several jobs at
-    once gives each its share), else the cores this process may run on."""
-    if os.environ.get("MPM_CORES", "").isdigit() and int(os.environ["MPM_CORES"]) > 0:
-        return int(os.environ["MPM_CORES"])
+def available_cores(environment=os.environ) -> int:
+    """The cores a run in `environment` may use: MPM_CORES when set (a worker running several
+    jobs at once gives each its share), else the cores this process may run on."""
+    if environment.get("MPM_CORES", "").isdigit() and int(environment["MPM_CORES"]) > 0:
+        return int(environment["MPM_CORES"])
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:   # not on Linux

@@ -35,6 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _warm_up_behind(name: str, settings) -> None:
     """The warm-up in a thread: the worker is ready (heartbeat, jobs) while it compiles."""
+    from solver.thread_count import available_cores
     from worker.tasks import get_store, job_environment
 
     def warming(flag: bool) -> None:
@@ -43,8 +44,7 @@ def _warm_up_behind(name: str, settings) -> None:
         except redis.RedisError as exc:
             log.warning("warm-up state not recorded: %s", exc, extra={"worker": name})
 
-    cores = job_environment(settings)["MPM_CORES"]
-    job_cores = int(cores) if cores.isdigit() else 1
+    job_cores = available_cores(job_environment(settings))
     threading.Thread(target=warm_up, kwargs={"warming": warming, "job_cores": job_cores}, name="mpm-warmup",
                      daemon=True).start()
 
