@@ -18,6 +18,7 @@ import json
 import math
 import numbers
 import os
+import signal
 import sys
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -185,6 +186,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if not parallel.is_root():   # with several processes rank 0 reports, the others compute
         result = run(scene, out_dir, resume=args.resume is not None, checkpoint_seconds=args.checkpoint_seconds)
+        _ignore_stop_signals()
         parallel.all_ranks_done()   # (rank 0 has reported: EXIT_PARTIAL here makes mpiexec stop it)
         return EXIT_OK if result.status == "complete" else EXIT_PARTIAL
 
@@ -205,6 +207,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     except SolverError as error:  # a checkpoint of another scene
         print(f"mpm run: error: {error}", file=sys.stderr)
         return EXIT_ERROR
+    _ignore_stop_signals()
     if bar is not None:
         bar.close()
     done = _plain(result)
@@ -244,6 +247,14 @@ def _balance_line(result_path: str) -> str | None:
     dissipated = " + plastic work" if "plastic_work" in series else ""
     return (f"energy balance: total {float(series['total_energy'][-1]):.6g}, "
             f"error {error:.3g}{share} (stored energy{dissipated} - work done on the bodies, against t = 0)")
+
+
+def _ignore_stop_signals() -> None:
+    """From the run's end to the exit: the run has saved what it had, so a stop signal has nothing
+    left to stop, and would kill a rank that waits for rank 0 to report (Slurm signals a preempted
+    job's processes node by node and more than once; MPI's launcher then aborts every rank)."""
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, signal.SIG_IGN)
 
 
 def _exec_processes(processes: int, args: argparse.Namespace) -> None:

@@ -73,11 +73,13 @@ class Result:
 class _StopSignals:
     """SIGTERM / SIGINT set a flag (when run() is in the main thread) so the step in flight finishes.
 
-    Once one has, the process ignores them to its end: a stop often comes twice (a Slurm
-    preemption signals every process of the job, MPI's launcher among them, which passes its
-    own on to the ranks), and a second one arriving after the run had restored the handlers
-    would kill the process on its way out, after its checkpoint. SIGKILL, which a stop that is
-    not heeded leads to, still ends it."""
+    The handlers stay until run() returns, not only while it steps: once the ranks have
+    stopped together on one rank's signal, another rank's own signal may come later (Slurm
+    signals a preempted job's processes node by node, and more than once), while rank 0 still
+    writes the checkpoint and the previews; with the default handler back it would kill that
+    rank, and MPI's launcher the others with it, before anything was written. run()'s caller
+    gets its handlers back (a notebook's Ctrl-C works again); the command line ignores stops
+    from there to its exit (solver/cli.py)."""
 
     def __init__(self):
         self.requested = False
@@ -94,7 +96,7 @@ class _StopSignals:
 
     def __exit__(self, *exc):
         for sig, handler in self._previous.items():
-            signal.signal(sig, signal.SIG_IGN if self.requested else handler)
+            signal.signal(sig, handler)
 
 
 class _FrameSchedule:
@@ -156,19 +158,20 @@ def _run(scene, out_dir, started, compiling, progress, should_stop, resume, chec
             loop.initial_energy = float(restart.series["total_energy"][0])
     domain = loop.sim.domain
     writer = domain.writer(out_dir, scene, __version__)   # a ResultWriter on rank 0
-    with writer, _StopSignals() as signals:
-        checkpoints = checkpoint.Checkpointer(out_dir, scene, checkpoint.Policy.of(scene, checkpoint_seconds),
-                                              writer, restart)
-        reason, message = loop.run(writer, checkpoints, signals)
-        loop.report(wallclock.perf_counter(), stage="writing")
-        checkpoints.finish(loop.sim, reason)
-        status = "complete" if reason == "finished" else "partial"
-        writer.close(status)
-    particles = int(domain.sum(loop.sim.particles.count))
-    loop.release()   # the preview reads the last frame back: not beside the particles' and grid's arrays
-    if domain.is_root:
-        from solver.preview import finish_outputs   # matplotlib: a second of imports, not before the first step
-        finish_outputs(out_dir, scene)
+    with _StopSignals() as signals:
+        with writer:
+            checkpoints = checkpoint.Checkpointer(out_dir, scene, checkpoint.Policy.of(scene, checkpoint_seconds),
+                                                  writer, restart)
+            reason, message = loop.run(writer, checkpoints, signals)
+            loop.report(wallclock.perf_counter(), stage="writing")
+            checkpoints.finish(loop.sim, reason)
+            status = "complete" if reason == "finished" else "partial"
+            writer.close(status)
+        particles = int(domain.sum(loop.sim.particles.count))
+        loop.release()   # the preview reads the last frame back: not beside the particles' and grid's arrays
+        if domain.is_root:
+            from solver.preview import finish_outputs   # matplotlib: a second of imports, not before the first step
+            finish_outputs(out_dir, scene)
     wall = wallclock.perf_counter() - started
     loop.report(wallclock.perf_counter(), stage="writing")
     return Result(status=status, reason=reason, message=message, steps=loop.sim.step_count, time=loop.sim.time,

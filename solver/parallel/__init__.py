@@ -42,13 +42,5 @@ def all_ranks_done() -> None:
     the result's last lines and its report. Nothing to wait for in one process."""
     started = launch.world()
     if started is not None and started[1] > 1:
-        import signal
         from mpi4py import MPI
-        # the run has stopped and written what it had: a SIGTERM now (Slurm signals a preempted
-        # step's processes more than once) has nothing left to stop, and would kill this rank
-        # while rank 0 writes
-        previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
-        try:
-            MPI.COMM_WORLD.Barrier()
-        finally:
-            signal.signal(signal.SIGTERM, previous)
+        MPI.COMM_WORLD.Barrier()

@@ -171,37 +171,50 @@ def test_tlmpm_translates_a_free_body_rigidly_without_reference_body_forces(tmp_
                                np.tile(np.multiply(velocity, 0.05), (result.particles, 1)), atol=1e-12)
 
 
-_STOPPED_TWICE = """
+_SIGNALLED_WHILE_WRITING = """
 import json, os, signal, sys
+import solver.preview
 from solver import run
-def progress(info):
-    if info.stage == "stepping":
-        os.kill(os.getpid(), signal.SIGTERM)
-result = run(json.loads(sys.argv[1]), sys.argv[2], progress=progress)
-os.kill(os.getpid(), signal.SIGTERM)   # a stop's second signal, once the run has ended (Slurm, mpiexec)
-os.kill(os.getpid(), signal.SIGINT)
+outputs = solver.preview.finish_outputs
+def signalled_while_writing(*args):
+    os.kill(os.getpid(), signal.SIGTERM)   # a rank's own stop signal, after the ranks stopped together
+    return outputs(*args)
+solver.preview.finish_outputs = signalled_while_writing
+result = run(json.loads(sys.argv[1]), sys.argv[2], should_stop=lambda: True)
 print(result.reason, "and alive")
 """
 
 
-def test_a_stopped_run_outlives_a_second_stop_signal(tmp_path):
-    """After a SIGTERM has stopped it, a run's process ignores more of them to its end: a second
-    one killed a rank on its way out after it had written its checkpoint, and the preempted
-    job read as failed."""
+def test_a_stop_signal_while_a_stopped_run_writes_its_outputs_does_not_end_it(tmp_path):
+    """A run stopped on request (as a rank is when another rank's signal stopped them all) that
+    gets a SIGTERM of its own while it writes its outputs finishes them: the signal reached
+    one rank of a preempted Slurm job after the ranks had stopped, and killed it (and MPI's
+    launcher the other) before rank 0 had written the checkpoint."""
     import json
     import subprocess
     import sys
 
     scene = block(dim=1, time={"end": 100.0, "dt": 1e-3})
-    done = subprocess.run([sys.executable, "-c", _STOPPED_TWICE, json.dumps(scene), str(tmp_path / "out")],
+    done = subprocess.run([sys.executable, "-c", _SIGNALLED_WHILE_WRITING, json.dumps(scene), str(tmp_path / "out")],
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().endswith("cancelled and alive")
+    assert (tmp_path / "out" / "preview.png").exists()
 
 
-def test_a_run_that_was_not_stopped_gives_the_signal_handlers_back(tmp_path):
+@pytest.mark.parametrize("stopped", [False, True])
+def test_a_run_gives_the_signal_handlers_back(tmp_path, stopped):
+    """Stopped by a signal (Ctrl-C in a notebook) or not, run() leaves its caller's handlers as
+    it found them: a notebook's next Ctrl-C interrupts as before."""
+    import os
     import signal
 
+    def interrupt(info):
+        if stopped and info.stage == "stepping":
+            os.kill(os.getpid(), signal.SIGINT)   # run()'s handler: a flag, the step in flight finishes
+
     before = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
-    run(block(time={"end": 0.002, "dt": 1e-3}), tmp_path / "out")
+    scene = block(time={"end": 100.0 if stopped else 0.002, "dt": 1e-3})
+    result = run(scene, tmp_path / "out", progress=interrupt)
+    assert result.reason == ("cancelled" if stopped else "finished")
     assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before
