@@ -185,8 +185,8 @@ def test_a_preempted_two_rank_job_stops_with_a_checkpoint_and_resumes(api, slurm
 
 
 def test_a_worker_stopped_mid_job_leaves_its_batch_job_running_for_the_next_worker(api, slurm_stack):
-    # the batch job must outlast the stopped worker's shutdown: with end = 40 (2 s of steps) it once
-    # ended first, on a loaded machine, and that worker finished the job
+    # the batch job must outlast the stopped worker's shutdown: with end = 40 (under a second of steps) it
+    # once ended first, on a loaded machine, and that worker finished the job
     job = submit(api, tiny_1d("slurm-worker-stopped", end=1000.0))
     files = JobFiles(slurm_stack.data_dir / "jobs", job["id"])
     running = wait_until(lambda: (r := api.get(f"/v1/jobs/{job['id']}").json())["step"] > 0 and r, 180, "steps")
