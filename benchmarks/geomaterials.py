@@ -176,6 +176,10 @@ def verification_rows():
                                 ("2D strip, S wave", ta.bar(("x-", "x+"), 2, "s"), ta.C_S)):
         (left, _), wall = timed(ta.energy_left, scene, speed)
         rows.append((f"{label}: energy left / initial", left, wall))
+    import test_cam_clay as tcc
+    for cfl in (0.5, 0.25):
+        (error, _), wall = timed(tcc.sloshing_energy_error, cfl)
+        rows.append((f"Cam-Clay sloshing box, cfl {cfl}: largest energy error / initial kinetic energy", error, wall))
     return rows
 
 

@@ -31,6 +31,8 @@ from solver.materials.registry import MaterialType, StateVariable
 from solver.schema import BaseMaterial, Positive, fmt, problems_at, scene_error
 
 PRECONSOLIDATION = "preconsolidation_pressure"
+# the model's strain energy: V sigma' : d eps^e summed over the steps (kernels/modified_cam_clay.py)
+ELASTIC_WORK = "elastic_work"
 MINIMUM_PRESSURE_FRACTION = 0.01   # of preconsolidation_pressure: the default minimum_pressure
 
 
@@ -114,5 +116,6 @@ MATERIAL = MaterialType(
     schema=ModifiedCamClay,
     solver_class="solver.materials.kernels.modified_cam_clay:ModifiedCamClay",
     state=(*FRICTIONAL_STATE,
-           StateVariable(PRECONSOLIDATION, output=True, initial=_initial_preconsolidation)),
+           StateVariable(PRECONSOLIDATION, output=True, initial=_initial_preconsolidation),
+           StateVariable(ELASTIC_WORK)),
 )

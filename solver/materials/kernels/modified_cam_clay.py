@@ -24,6 +24,10 @@ with the same return each; past that the particle's yield_state is 2 (UNCONVERGE
 Undrained (d eps_v = 0), kappa ln(p/p_n) + (lambda - kappa) ln(p_c/p_c,n) = 0 holds to
 round-off in every step, whatever its size: the closed-form undrained effective stress
 path (tests/verification/test_cam_clay.py).
+
+The model is hypoelastic, so its strain energy is not a function of the stress: each
+particle adds up the elastic work V sigma' : d eps^e of its steps (`elastic_work`; the
+plastic work is that of solver/materials/plastic_work.py), which closes the energy balance.
 """
 from __future__ import annotations
 
@@ -34,6 +38,7 @@ import numpy as np
 
 from solver.jit import njit, prange
 from solver.materials.drucker_prager import ELASTIC, SURFACE
+from solver.materials.modified_cam_clay import ELASTIC_WORK
 from solver.materials.kernels import objective
 from solver.threads import block_bounds
 
@@ -124,56 +129,67 @@ def _added(s, d, f):
 
 
 @njit(cache=True)
+def elastic_work(p_n, s_n, p, s, elastic_strain, two_g):
+    """sigma : d eps^e per volume over an increment: the volumetric part by the trapezoid rule,
+    the deviatoric part (s - s_n = 2 G d e^e at a fixed G) exactly, (s:s - s_n:s_n) / (4 G)."""
+    q_n, q = objective.von_mises_of(s_n), objective.von_mises_of(s)
+    return 0.5 * (p_n + p) * elastic_strain + (q * q - q_n * q_n) / (3.0 * two_g)
+
+
+@njit(cache=True)
 def substepped(p_n, s_n, pc_n, strain, dev_strain, a, ratio, b, m2, p_min):
     """`increment` over the whole step, else over 2, 4, ... MOST_SUBSTEPS equal parts of it:
-    (p, s, p_c, x, d eps_q^p, work per volume, yield state)."""
+    (p, s, p_c, x, d eps_q^p, plastic work per volume, elastic work per volume, yield state)."""
     parts = 1
     while True:
-        p, s, pc, x_sum, eq_sum, work, state = p_n, s_n, pc_n, 0.0, 0.0, 0.0, ELASTIC
+        p, s, pc, x_sum, eq_sum, work, stored, state = p_n, s_n, pc_n, 0.0, 0.0, 0.0, 0.0, ELASTIC
         part = objective.scaled(dev_strain, 1.0 / parts)
         ok = True
         for _ in range(parts):
+            p_0, s_0, two_g = p, s, 2.0 * ratio * a * max(p, p_min)
             p, s, pc, x, eq, sub_state, converged = increment(p, s, pc, strain / parts, part, a, ratio, b, m2, p_min)
             ok = ok and converged
             if sub_state != ELASTIC:
                 state = sub_state
                 # sigma : d eps_p, compression positive p with compression positive x
                 work += p * x + objective.von_mises_of(s) * eq
+            stored += elastic_work(p_0, s_0, p, s, strain / parts - x, two_g)
             x_sum += x
             eq_sum += eq
         if ok:
-            return p, s, pc, x_sum, eq_sum, work, state
+            return p, s, pc, x_sum, eq_sum, work, stored, state
         if parts >= MOST_SUBSTEPS:
-            return p, s, pc, x_sum, eq_sum, work, UNCONVERGED
+            return p, s, pc, x_sum, eq_sum, work, stored, UNCONVERGED
         parts *= 2
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, eps_p, state, pc, volume, volume0, work, dt, one_plus_e0, kappa, ratio, lam_minus_kappa,
-            m2, p_min, threads):
+def _update(L, stress, eps_p, state, pc, volume, volume0, work, stored, dt, one_plus_e0, kappa, ratio,
+            lam_minus_kappa, m2, p_min, threads):
     """The stress update; returns the largest (1 + e) max(p, p_min) of each thread's block."""
     bounds = block_bounds(L.shape[0], threads)
     stiffest = np.zeros(threads)
     for t in prange(threads):
         stiffest[t] = _update_block(bounds[t], bounds[t + 1], L, stress, eps_p, state, pc, volume, volume0, work,
-                                    dt, one_plus_e0, kappa, ratio, lam_minus_kappa, m2, p_min)
+                                    stored, dt, one_plus_e0, kappa, ratio, lam_minus_kappa, m2, p_min)
     return stiffest
 
 
 @njit(cache=True)
-def _update_block(lo, hi, L, stress, eps_p, state, pc, volume, volume0, work, dt, one_plus_e0, kappa, ratio,
-                  lam_minus_kappa, m2, p_min):
+def _update_block(lo, hi, L, stress, eps_p, state, pc, volume, volume0, work, stored, dt, one_plus_e0, kappa,
+                  ratio, lam_minus_kappa, m2, p_min):
     stiffest = 0.0
     for p in range(lo, hi):
         D, w21, w02, w10 = objective.rate_parts(L[p])
         sigma = objective.rotated(stress[p], w21, w02, w10, dt)
         one_e = one_plus_e0 * volume[p] / volume0[p]
         dev_strain = objective.trial_deviator(objective.NO_STRESS, D, dt)
-        mean, s, pc[p], x, eq, w, state[p] = substepped(
+        mean, s, pc[p], x, eq, w, e, state[p] = substepped(
             objective.mean_pressure(sigma), objective.trial_deviator(sigma, D, 0.0), pc[p],
             -objective.trace(D) * dt, dev_strain, one_e / kappa, ratio, one_e / lam_minus_kappa, m2, p_min)
         eps_p[p] += eq
         work[p] += volume[p] * w
+        stored[p] += volume[p] * e
         objective.assemble_from(s, mean, stress[p])
         stiffest = max(stiffest, one_e * max(mean, p_min))
     return stiffest
@@ -211,22 +227,33 @@ class ModifiedCamClay:
         one_e = self.one_plus_e0 * particles.volume[sl] / particles.volume0[sl]
         stiffest = float(np.max(one_e * np.maximum(p, self.p_min), initial=0.0))
         self._set_wave_speed(max(stiffest, self.one_plus_e0 * self.p_min))
+        particles.extra[ELASTIC_WORK][sl] = particles.volume[sl] * self._work_from_rest(p, q, one_e / self.kappa)
+
+    def _work_from_rest(self, p: np.ndarray, q: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """The elastic work per volume that brings a stress-free particle to (p', q): the
+        isotropic part along dp = a max(p, p_min) d eps_v (linear below the floor, exponential
+        above it), then the shear at that p'. Exact for that path: V / a = V0 kappa / (1 + e0)
+        whatever the volume. The strain energy's start, so that it reads as what the body
+        holds, not only what it gained."""
+        floor = self.p_min
+        isotropic = np.where(p <= floor, p * p / (2.0 * a * floor), floor / (2.0 * a) + (p - floor) / a)
+        return isotropic + q * q / (6.0 * self.ratio * a * np.maximum(p, floor))
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
         stiffest = _update(particles.L[sl], particles.stress[sl], particles.extra["plastic_strain"][sl],
                            particles.extra["yield_state"][sl], particles.extra["preconsolidation_pressure"][sl],
-                           particles.volume[sl], particles.volume0[sl], particles.extra["plastic_work"][sl], dt,
+                           particles.volume[sl], particles.volume0[sl], particles.extra["plastic_work"][sl],
+                           particles.extra[ELASTIC_WORK][sl], dt,
                            self.one_plus_e0, self.kappa, self.ratio, self.lam_minus_kappa, self.m2, self.p_min,
                            numba.get_num_threads())
         self._set_wave_speed(max(float(stiffest.max()), self.one_plus_e0 * self.p_min))
 
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
-        """V (p^2 / (2 K) + q^2 / (6 G)) with the current moduli (the hypoelastic model has no
-        stored energy function; this is sigma : C^-1 : sigma / 2 of the tangent moduli)."""
-        p, q = invariants(particles.stress[sl])
-        one_e = self.one_plus_e0 * particles.volume[sl] / particles.volume0[sl]
-        bulk = one_e * np.maximum(p, self.p_min) / self.kappa
-        return particles.volume[sl] * (p * p / (2.0 * bulk) + q * q / (6.0 * self.ratio * bulk))
+        """The elastic work done on each particle: from rest to its initial stress
+        (`_work_from_rest`), then in each step's update. The model is hypoelastic: it has
+        no stored energy function of the stress, and sigma : C^-1 : sigma / 2 with the moduli of
+        the moment changes as p' alone does (G follows p'), which no work pays for."""
+        return particles.extra[ELASTIC_WORK][sl].copy()
 
     def strain_energy(self, particles, sl: slice) -> float:
         return float(self.particle_strain_energy(particles, sl).sum())
