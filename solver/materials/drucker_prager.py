@@ -57,17 +57,38 @@ class DruckerPrager(FrictionalMaterial):
     model: Literal["drucker_prager"]
     # Which Mohr-Coulomb meridian the cone passes through (de Souza Neto eq. 8.88):
     # "compression" (outer cone), "extension" (inner cone) or "plane_strain" (the same
-    # plane-strain collapse loads as Mohr-Coulomb).
+    # plane-strain collapse loads as Mohr-Coulomb, for its dilation angle: `strength`).
     fit: Literal["compression", "extension", "plane_strain"] = "compression"
 
     def cone(self, angle_degrees: float) -> tuple[float, float]:
-        """(eta, xi) of sqrt(J2) + eta tr(sigma)/3 - xi c for this fit and angle."""
+        """(eta, xi) of sqrt(J2) + eta tr(sigma)/3 - xi c for this fit and angle, as eq. 8.88
+        gives them (in plane strain: for associated flow). The potential's eta_bar is the eta
+        of the dilation angle: in plane strain the plastic volume change is then sin(psi) times
+        the in-plane shear, as in Mohr-Coulomb."""
         s, t = math.sin(math.radians(angle_degrees)), math.tan(math.radians(angle_degrees))
         if self.fit == "plane_strain":
             root = math.sqrt(9.0 + 12.0 * t * t)
             return 3.0 * t / root, 3.0 / root
         denominator = math.sqrt(3.0) * (3.0 - s if self.fit == "compression" else 3.0 + s)
         return 6.0 * s / denominator, 6.0 * math.cos(math.radians(angle_degrees)) / denominator
+
+    def strength(self) -> tuple[float, float, float]:
+        """(eta, xi, eta_bar): the yield cone and the potential's slope.
+
+        In plane strain the cone that collapses where Mohr-Coulomb does depends on the flow.
+        At collapse no plastic strain goes out of the plane, so s_zz = -2 eta_bar sqrt(J2) / 3;
+        with t = (sigma_1 - sigma_3) / 2 and m = (sigma_1 + sigma_3) / 2 in the plane,
+        sqrt(J2) = t / r and tr(sigma)/3 = m - eta_bar sqrt(J2) / 3, r = sqrt(1 - eta_bar^2 / 3).
+        The cone then reads t (1 - eta eta_bar / 3) / r + eta m = xi c: Mohr-Coulomb's
+        t + sin(phi) m = c cos(phi) for the eta and xi below. Associated flow (eta_bar = eta)
+        gives eq. 8.88 again; no dilation gives eta = sin(phi), xi = cos(phi)."""
+        eta_bar = self.cone(self.dilation_angle)[0]
+        if self.fit != "plane_strain":
+            return (*self.cone(self.friction_angle), eta_bar)
+        s, c = math.sin(math.radians(self.friction_angle)), math.cos(math.radians(self.friction_angle))
+        r = math.sqrt(1.0 - eta_bar * eta_bar / 3.0)
+        eta = s / (r + s * eta_bar / 3.0)
+        return eta, c * (1.0 - eta * eta_bar / 3.0) / r, eta_bar
 
 
 MATERIAL = MaterialType(

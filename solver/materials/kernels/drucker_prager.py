@@ -76,8 +76,7 @@ def return_map(m, j, K, G, eta, eta_bar, xi_c, cutoff):
 class DruckerPrager(Frictional):
     def __init__(self, config, dimension: int):
         super().__init__(config, dimension)
-        self.eta, xi = config.cone(config.friction_angle)
-        self.eta_bar = config.cone(config.dilation_angle)[0]
+        self.eta, xi, self.eta_bar = config.strength()
         self.xi_c = xi * config.cohesion
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
