@@ -27,7 +27,7 @@ MAX_PROCESSES = 64   # MPI ranks (solver/parallel); the service caps jobs furthe
 SCENE_FIELDS = frozenset({
     "position", "velocity", "stress", "mass", "volume", "density", "pressure", "pressure_smoothed", "von_mises",
     "velocity_magnitude", "deformation_gradient", "strain_energy_density", "heat_flux", "particle_domain",
-    "pore_pressure", "effective_stress",
+    "pore_pressure", "effective_stress", "reference_position",
 })
 
 

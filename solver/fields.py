@@ -117,6 +117,7 @@ FIELDS = {
     "particle_domain": _particle_domain,
     "pore_pressure": _pore_pressure,
     "effective_stress": lambda sim: voigt(sim.particles.stress),
+    "reference_position": lambda sim: sim.particles.X,   # kept where a frame asks for it (stepper.py)
 }
 """The fields of every scene (capabilities.SCENE_FIELDS names them for the scene's checks);
 the materials add their state's (plastic_strain, damage, temperature, internal_energy, ...:

@@ -54,7 +54,8 @@ _SUPPORT = {"linear": 1.0, "cubic_bspline": 2.0, "quadratic_bspline": 1.5, "bern
 _DUMP_FIELDS = {"x": "position", "y": "position", "z": "position", "vx": "velocity", "vy": "velocity",
                 "vz": "velocity", "s11": "stress", "s22": "stress", "s33": "stress", "s12": "stress",
                 "s13": "stress", "s23": "stress", "seq": "von_mises", "volume": "volume", "mass": "mass",
-                "damage": "damage", "T": "temperature", "ienergy": "strain_energy_density"}
+                "damage": "damage", "T": "temperature", "ienergy": "strain_energy_density",
+                "x0": "reference_position", "y0": "reference_position", "z0": "reference_position"}
 _OUTPUT_ONLY = ("set_output", "log", "log_modify", "plot", "save_plot")
 # commands translated after a first run (a set-up run, LATE_SHARE): they act on nodes or define names
 _AFTER_RUN = {"fix", "region", "group", "dump", "run", "run_time"}

@@ -43,6 +43,12 @@ class Instability(SolverError, RuntimeError):
         return Instability, (self.step, self.time, self.particle_id, self.quantity, self.detail)
 
 
+def needs_reference_position(scene, loads, formulation) -> bool:
+    """Whether the particles keep X, their seeded position: TLMPM's reference, a body force
+    in X, Y, Z, or the `reference_position` output field."""
+    return loads.needs_reference or formulation.reference or "reference_position" in scene.output.fields
+
+
 class ExplicitMPM:
     """Particles, grid and the step of one scene (ULMPM or TLMPM, as the scene says)."""
 
@@ -73,7 +79,7 @@ class ExplicitMPM:
         self.loads = BodyLoads(scene)
         self.applied_loads = AppliedLoads(scene, self.particles) if scene.loads else None   # as seeded
         self.formulation = step.FORMULATIONS[method.formulation]()
-        if self.loads.needs_reference or self.formulation.reference:   # TLMPM: slabs of X too
+        if needs_reference_position(scene, self.loads, self.formulation):   # TLMPM: slabs of X too
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
         self.time = 0.0

@@ -132,8 +132,8 @@ def particle_bytes(scene: Scene) -> int:
     """Bytes per particle of the arrays the solver keeps for it (solver/state.py Particles):
     8-byte position, velocity (dim each), F and L (dim^2, 3x3 axisymmetric), stress (9),
     mass, volume, volume0, id; the 4-byte body index; the materials' declared state
-    (solver/materials/registry.py state_values); the reference position where TLMPM or a
-    body force needs it (and TLMPM's first Piola stress); C_p of APIC and MLS; the fused
+    (solver/materials/registry.py state_values); the reference position where TLMPM, a
+    body force or the `reference_position` output field needs it (and TLMPM's first Piola stress); C_p of APIC and MLS; the fused
     backend's v_pic of MUSL's remap (allocated for any scheme), or the general backend's
     stored stencil: the weights, weight gradients and node indices of the nodes it touches."""
     from solver.loads import BodyLoads
@@ -143,7 +143,7 @@ def particle_bytes(scene: Scene) -> int:
     values = 2 * dim + 2 * tensor + 9 + 4 + materials.state_values(scene)
     if scene.method.formulation == "tlmpm":
         values += dim + tensor
-    elif BodyLoads(scene).needs_reference:
+    elif BodyLoads(scene).needs_reference or "reference_position" in scene.output.fields:
         values += dim
     if scene.method.transfer in _AFFINE_TRANSFERS:
         values += dim * dim
@@ -166,9 +166,10 @@ def node_bytes(scene: Scene, threads: int) -> int:
 
 
 # Values per particle of an output field in a frame (solver/fields.py); 1 for the scalars.
-_FRAME_FIELD_WIDTH = {"position": "dim", "velocity": "dim", "stress": 6, "deformation_gradient": "dim2"}
+_FRAME_FIELD_WIDTH = {"position": "dim", "velocity": "dim", "stress": 6, "deformation_gradient": "dim2",
+                      "reference_position": "dim"}
 # Output fields one process writes from the state's own arrays (no copy); the others are formed for the frame.
-_FRAME_VIEWS = {"position", "velocity", "deformation_gradient", "mass", "volume"}
+_FRAME_VIEWS = {"position", "velocity", "deformation_gradient", "mass", "volume", "reference_position"}
 _BODY_BYTES = 4096          # a body's own objects (its geometry, material, expressions), roughly
 _FRAME_BYTES = 256          # a frame's bookkeeping (its HDF5 group and attributes in the writer)
 _SERIES_VALUE_BYTES = 16    # a buffered row's float and its dataset value

@@ -236,3 +236,21 @@ def test_the_vortex_body_force_is_the_files_formula_by_name():
         for axis in range(2):
             got = scene.expression(scene.body_force[axis], ("X", "Y", "t")).evaluate(X=x, Y=y, t=t)
             assert np.allclose(got, expected[axis], rtol=1e-12, atol=1e-9 * np.max(np.abs(expected[axis])))
+
+
+def test_the_vortex_dump_writes_the_reference_position(tmp_path):
+    """The vortex dumps x0, y0, z0: imported as the `reference_position` field, nothing of
+    that dump left untranslated, and a run writes each particle's seeded position there
+    while its position moves."""
+    from solver import run
+    from solver.results import read_frame
+    translation = translate_file(DATA / "vortex__Linear__vortex.mpm")
+    assert "reference_position" in translation.scene["output"]["fields"]
+    assert not any("x0" in item.reason for item in translation.untranslated)
+    scene = dict(translation.scene, time={**translation.scene["time"], "end": 0.02}, output={
+        **translation.scene["output"], "frames": 2})
+    result = run(scene, tmp_path / "vortex")
+    first, last = read_frame(result.result_path, 0)["fields"], read_frame(result.result_path, -1)["fields"]
+    assert np.array_equal(first["reference_position"], first["position"])
+    assert np.array_equal(last["reference_position"], first["position"])
+    assert not np.array_equal(last["position"], first["position"])

@@ -198,3 +198,22 @@ def test_the_memory_estimate_counts_what_a_3d_johnson_cook_run_allocates():
     parts = memory_estimate(scene, summary.particles, summary.grid_nodes)
     assert sim.particles.count == summary.particles
     assert sum(parts.values()) == pytest.approx(peak, rel=0.10)
+
+
+def test_the_reference_position_field_keeps_and_counts_the_seeded_positions(tmp_path):
+    """An update-Lagrangian scene keeps X only for the `reference_position` output field:
+    the memory estimate counts its dim values a particle, and the run writes the seeded
+    positions while the particles move."""
+    import numpy as np
+
+    from solver import run
+    from solver.results import read_frame
+    scene = two_disks()
+    asked = two_disks()
+    asked["output"] = {**asked.get("output", {}), "fields": ["position", "reference_position"], "frames": 2}
+    assert particle_bytes(load_scene(asked)) - particle_bytes(load_scene(scene)) == 8 * 2
+    asked["time"] = {**asked["time"], "end": 20 * asked["time"]["dt"]}
+    result = run(asked, tmp_path / "run")
+    first, last = (read_frame(result.result_path, i)["fields"] for i in (0, -1))
+    assert np.array_equal(last["reference_position"], first["position"])
+    assert not np.array_equal(last["position"], first["position"])
