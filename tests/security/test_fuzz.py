@@ -2,13 +2,14 @@
 service's own OpenAPI document, valid and invalid, for every operation; hypothesis
 generates scenes from the scene's own JSON Schema (scene_strategies.py), arbitrary JSON
 for scene fields and arbitrary text for expressions. For every request: an answer within
-ANSWER_SECONDS, never a 5xx, never a traceback or a server path in the body; every refusal
+ANSWER_CPU_SECONDS of the API's CPU time (and ANSWER_WALL_SECONDS of wall time), never a 5xx, never a traceback or a server path in the body; every refusal
 in the error format, a 422 naming the paths, a 413 the limit; the API's memory bounded and
 the service healthy afterwards. Seeded (derandomize) and bounded to keep CI short; the long
 run is benchmarks/fuzz.py (docs/reliability.md)."""
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -25,7 +26,11 @@ from service_support import two_disks
 
 FUZZ_SETTINGS = dict(deadline=None, phases=[Phase.explicit, Phase.generate],
                      suppress_health_check=list(HealthCheck), derandomize=True)
-ANSWER_SECONDS = 1.0
+# Bounded work: the API process's CPU time for one answer. Its wall time is stretched by
+# whatever else runs on the cores (a 422 took 2.1 s of wall time while the suite's other
+# workers compiled on both cores), so that bound is loose: it catches an answer that waits.
+ANSWER_CPU_SECONDS = 1.0
+ANSWER_WALL_SECONDS = 20.0
 MEMORY_GROWTH_BYTES = 300 * 2**20   # the API (mpm serve's process) over the whole module
 REPOSITORY = str(Path(__file__).resolve().parents[2])
 
@@ -60,16 +65,25 @@ def _server_paths(secure) -> list[str]:
     return [str(secure.data_dir), REPOSITORY, sys.prefix, "site-packages"]
 
 
-def timed(call):
-    """(the answer, seconds) of a request."""
-    started = time.monotonic()
+def cpu_seconds(pid: int) -> float:
+    """User plus system CPU time of a process and its threads so far (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def timed(call, pid: int):
+    """(the answer, the CPU seconds the API process `pid` spent meanwhile) of a request,
+    whose wall time is checked here."""
+    cpu, started = cpu_seconds(pid), time.monotonic()
     answer = call()
-    return answer, time.monotonic() - started
+    wall = time.monotonic() - started
+    assert wall < ANSWER_WALL_SECONDS, f"answered after {wall:.1f} s: {answer.content[:200]!r}"
+    return answer, cpu_seconds(pid) - cpu
 
 
 def check_answer(status: int, body: bytes, seconds: float = 0.0, paths: list[str] = ()) -> None:
     assert status < 500, body[:500]
-    assert seconds < ANSWER_SECONDS, f"answered in {seconds:.2f} s: {body[:200]!r}"
+    assert seconds < ANSWER_CPU_SECONDS, f"the answer took {seconds:.2f} s of the API's CPU: {body[:200]!r}"
     text = body.decode("utf-8", "replace")
     assert "Traceback (most recent call last)" not in text and 'File "/' not in text, text[:500]
     assert not [path for path in paths if path in text], text[:500]
@@ -92,7 +106,8 @@ def test_no_operation_answers_5xx(secure, fuzz):
         @given(case=operation.as_strategy())
         @settings(max_examples=8, **FUZZ_SETTINGS)
         def call(case):
-            response, seconds = timed(lambda: case.call(base_url=secure.url, headers=bearer("fuzz")))
+            response, seconds = timed(lambda: case.call(base_url=secure.url, headers=bearer("fuzz")),
+                                      secure.process.pid)
             check_answer(response.status_code, response.content, seconds, _server_paths(secure))
         call()
 
@@ -111,7 +126,7 @@ SCENE_KEYS = ["version", "name", "dimension", "grid", "materials", "bodies", "ti
 def test_any_json_in_a_scene_field_is_answered_with_its_path(secure, fuzz, key, value):
     scene = two_disks()
     scene[key] = value
-    answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene))
+    answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene), secure.process.pid)
     check_answer(answer.status_code, answer.content, seconds, _server_paths(secure))
     assert answer.status_code in (200, 422)
 
@@ -127,7 +142,7 @@ def test_scenes_drawn_from_the_scene_schema_are_answered_fast(secure, fuzz, scen
     @given(scene=scene_strategies.scenes(scene_schema))
     @settings(max_examples=60, **FUZZ_SETTINGS)
     def call(scene):
-        answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene))
+        answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene), secure.process.pid)
         check_answer(answer.status_code, answer.content, seconds, _server_paths(secure))
         assert answer.status_code in (200, 422)
     call()
@@ -141,7 +156,7 @@ def test_a_schema_drawn_part_in_a_valid_scene_is_answered_fast(secure, fuzz, sce
     def call(part):
         scene = two_disks()
         scene[part[0]] = part[1]
-        answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene))
+        answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene), secure.process.pid)
         check_answer(answer.status_code, answer.content, seconds, _server_paths(secure))
         assert answer.status_code in (200, 422)
     call()
@@ -149,11 +164,11 @@ def test_a_schema_drawn_part_in_a_valid_scene_is_answered_fast(secure, fuzz, sce
 
 @given(text=st.text(max_size=80) | st.from_regex(r"[-+*/() x0-9.e*]{1,60}", fullmatch=True))
 @settings(max_examples=80, **FUZZ_SETTINGS)
-def test_any_expression_is_compiled_or_refused_at_its_path(fuzz, text):
+def test_any_expression_is_compiled_or_refused_at_its_path(secure, fuzz, text):
     scene = two_disks()
     scene["bodies"][0]["initial_velocity"] = [text, 0]
     scene["time"]["allow_unstable_dt"] = True   # a valid expression may be a speed the fixed dt cannot follow
-    answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene))
+    answer, seconds = timed(lambda: fuzz.post("/v1/scenes/validate", json=scene), secure.process.pid)
     check_answer(answer.status_code, answer.content, seconds)
     assert answer.status_code in (200, 422)
     if answer.status_code == 422:

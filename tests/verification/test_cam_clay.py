@@ -194,7 +194,6 @@ def test_random_steps_land_on_the_surface():
         assert abs(yield_value(*invariants(point.stress), pc)) < 1e-12 * pc**2
 
 
-
 def _stress_work(point, L, steps):
     """Drive the point by L for `steps` unit steps: the work sum V_{n+1} (sigma_n +
     sigma_{n+1}) / 2 : D (the trapezoid rule, with the volume the update sees)."""
@@ -218,7 +217,7 @@ def test_strain_energy_is_the_work_done_on_an_elastic_path():
     factor of 2 and q from 0 to 29 kPa: the strain energy grows by the stress work. The
     volumetric parts are the same trapezoid sums, the deviatoric part exact at the step's
     G, so they agree to round-off; sigma : C^-1 : sigma / 2 at the current moduli (what this
-    model's strain energy was) would be off by tens of per cent, since G follows p'."""
+    model's strain energy was) is off by 35 % here, since G follows p'."""
     point = MaterialPoint(CLAY, 3, stress=-PC0 / 5 * np.eye(3))
     start = _strain_energy(point)
     rate = 5e-5

@@ -35,8 +35,6 @@ MODELS = ("drucker_prager", "mohr_coulomb")
 # the deposit has stopped: its kinetic energy is under this share of the flow's peak (an rms
 # speed under 7 % of the peak's); measured 2e-6 .. 1.7e-3 at the end of every run here
 STOPPED = 5e-3
-
-
 SAND = json.loads((EXAMPLES / "granular_collapse_tall_2d.json").read_text())["materials"]["sand"]
 # runout = lambda1 a below the first break, lambda2 a^(2/3) above the second (between them
 # the papers fit neither): (lambda1, lambda2, first break, second break)
@@ -48,11 +46,12 @@ def law_runout(aspect, law=LUBE):
     """(L_inf - L0) / L0 of a paper's fit as (lower, upper): one value on a branch, the two
     branches' values where a lies between the breaks."""
     linear, power, first, second = law
-    values = [linear * aspect] if aspect < first else []
-    values += [power * aspect ** (2 / 3)] if aspect > second or first <= aspect <= second else []
-    if first <= aspect <= second:
-        values.append(linear * aspect)
-    return min(values), max(values)
+    on_line, on_power = linear * aspect, power * aspect ** (2 / 3)
+    if aspect < first:
+        return on_line, on_line
+    if aspect > second:
+        return on_power, on_power
+    return min(on_line, on_power), max(on_line, on_power)
 
 
 def within(value, bounds, rel):
@@ -128,22 +127,18 @@ def test_runout_and_final_height_against_lube_2005(run_case, name, aspect):
         assert height == pytest.approx(aspect ** 0.4, rel=0.20)
 
 
-def test_both_models_collapse_alike():
+def test_both_models_collapse_alike(run_case):
     """a = 2, h = L0 / 10 (the default suite's case of the sweep below): Drucker-Prager's
     plane-strain fit collapses where Mohr-Coulomb does (drucker_prager.py, `strength`), so
     the two deposits match to the flows' transients (runouts within 5 %: the sweep's largest
     gap is 3.8 %, a = 5), and each runout is within 15 % of Lube et al.'s (a = 2 lies between
     their two branches, 2.40 and 3.02)."""
-    from mpm_cases import Case
-    from solver import run
-    import tempfile
     deposits = []
-    with tempfile.TemporaryDirectory() as folder:
-        for model in MODELS:
-            scene = column_scene(2.0, model)
-            case = Case(run(scene, Path(folder) / model))
-            assert kinetic_left(case) < STOPPED
-            deposits.append(deposit(case, scene))
+    for model in MODELS:
+        scene = column_scene(2.0, model)
+        case = run_case(scene, model)
+        assert kinetic_left(case) < STOPPED
+        deposits.append(deposit(case, scene))
     (dp_runout, dp_height, _), (mc_runout, mc_height, _) = deposits
     assert dp_runout == pytest.approx(mc_runout, rel=0.05) and dp_height == pytest.approx(mc_height, rel=0.05)
     assert within(dp_runout, law_runout(2.0), 0.15) and within(mc_runout, law_runout(2.0), 0.15)
