@@ -23,6 +23,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable
 
+from core.processes import die_with_parent
 from worker.runner import solver_command
 
 log = logging.getLogger("mpm.worker")
@@ -71,8 +72,9 @@ def _compile(dimension: int, model: str, threads: int, folder: Path, timeout: fl
     started = time.monotonic()
     extra = {"dimension": dimension, "model": model, "threads": threads}
     try:
+        # a worker killed while it warms up (kill -9, `mpm serve` stopped) leaves no compile running
         done = subprocess.run(solver_command(scene, folder / name, progress="none"),
-                              capture_output=True, text=True, timeout=timeout)
+                              capture_output=True, text=True, timeout=timeout, preexec_fn=die_with_parent)
     except subprocess.TimeoutExpired:
         log.warning("warm-up timed out", extra=extra)
         return

@@ -1,4 +1,11 @@
 """The worker's warm-up (worker/warmup.py): only the variants not yet compiled, flagged while it runs."""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
 from worker import warmup
 
 
@@ -30,3 +37,33 @@ def test_pending_leaves_out_the_variants_a_run_marked_compiled(monkeypatch):
 def test_the_warm_up_compiles_the_parallel_forms_only_for_jobs_that_may_take_several_cores():
     assert warmup.thread_counts(1) == (1,)
     assert warmup.thread_counts(4) == (1, 4)
+
+
+
+def _running(pid: int) -> bool:
+    """Whether a process exists and has not ended (a zombie waits to be collected: ended)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_a_worker_killed_while_it_warms_up_leaves_no_compile_running(tmp_path):
+    """A process warming up (its compile a stand-in that runs a minute) killed with SIGKILL,
+    as a crashed worker is: its compile ends with it instead of running on for up to the
+    warm-up's timeout (it did, into the cache folder of a service already stopped)."""
+    program = ("from pathlib import Path; from worker import warmup; "
+               "warmup.solver_command = lambda *a, **k: ['sleep', '60']; "
+               f"warmup._compile(2, 'linear_elastic', 1, Path({str(tmp_path)!r}), 600)")
+    worker = subprocess.Popen([sys.executable, "-c", program], cwd=Path(warmup.__file__).parents[1])
+    children = Path(f"/proc/{worker.pid}/task/{worker.pid}/children")
+    deadline = time.monotonic() + 30
+    while not children.read_text().split() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    compile_pid = int(children.read_text().split()[0])
+    os.kill(worker.pid, signal.SIGKILL)
+    worker.wait()
+    deadline = time.monotonic() + 10
+    while _running(compile_pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not _running(compile_pid)
