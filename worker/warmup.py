@@ -23,7 +23,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable
 
-from core.processes import die_with_parent
+from core.processes import killed_with_parent
 from worker.runner import solver_command
 
 log = logging.getLogger("mpm.worker")
@@ -74,7 +74,7 @@ def _compile(dimension: int, model: str, threads: int, folder: Path, timeout: fl
     try:
         # a worker killed while it warms up (kill -9, `mpm serve` stopped) leaves no compile running
         done = subprocess.run(solver_command(scene, folder / name, progress="none"),
-                              capture_output=True, text=True, timeout=timeout, preexec_fn=die_with_parent)
+                              capture_output=True, text=True, timeout=timeout, preexec_fn=killed_with_parent)
     except subprocess.TimeoutExpired:
         log.warning("warm-up timed out", extra=extra)
         return

@@ -49,16 +49,20 @@ def _running(pid: int) -> bool:
 
 
 def test_a_worker_killed_while_it_warms_up_leaves_no_compile_running(tmp_path):
-    """A process warming up (its compile a stand-in that runs a minute) killed with SIGKILL,
-    as a crashed worker is: its compile ends with it instead of running on for up to the
-    warm-up's timeout (it did, into the cache folder of a service already stopped)."""
+    """A process warming up killed with SIGKILL, as a crashed worker is: its compile ends with
+    it. The stand-in compile runs a minute and, as the solver does while it compiles (it stops
+    at its next step), takes no notice of SIGTERM; the real ones compiled on into the cache
+    folder of a service already stopped."""
+    ready = tmp_path / "ignoring"
+    stand_in = [sys.executable, "-c", "import signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); "
+                f"open({str(ready)!r}, 'w').close(); time.sleep(60)"]
     program = ("from pathlib import Path; from worker import warmup; "
-               "warmup.solver_command = lambda *a, **k: ['sleep', '60']; "
+               f"warmup.solver_command = lambda *a, **k: {stand_in!r}; "
                f"warmup._compile(2, 'linear_elastic', 1, Path({str(tmp_path)!r}), 600)")
     worker = subprocess.Popen([sys.executable, "-c", program], cwd=Path(warmup.__file__).parents[1])
     children = Path(f"/proc/{worker.pid}/task/{worker.pid}/children")
     deadline = time.monotonic() + 30
-    while not children.read_text().split() and time.monotonic() < deadline:
+    while not ready.exists() and time.monotonic() < deadline:
         time.sleep(0.05)
     compile_pid = int(children.read_text().split()[0])
     os.kill(worker.pid, signal.SIGKILL)
