@@ -129,10 +129,10 @@ def _added(s, d, f):
 
 
 @njit(cache=True)
-def elastic_work(p_n, s_n, p, s, elastic_strain, two_g):
+def elastic_work(p_n, q_n, p, q, elastic_strain, two_g):
     """sigma : d eps^e per volume over an increment: the volumetric part by the trapezoid rule,
-    the deviatoric part (s - s_n = 2 G d e^e at a fixed G) exactly, (s:s - s_n:s_n) / (4 G)."""
-    q_n, q = objective.von_mises_of(s_n), objective.von_mises_of(s)
+    the deviatoric part (s - s_n = 2 G d e^e at a fixed G) exactly, (s:s - s_n:s_n) / (4 G),
+    s:s = 2 q^2 / 3."""
     return 0.5 * (p_n + p) * elastic_strain + (q * q - q_n * q_n) / (3.0 * two_g)
 
 
@@ -143,17 +143,19 @@ def substepped(p_n, s_n, pc_n, strain, dev_strain, a, ratio, b, m2, p_min):
     parts = 1
     while True:
         p, s, pc, x_sum, eq_sum, work, stored, state = p_n, s_n, pc_n, 0.0, 0.0, 0.0, 0.0, ELASTIC
+        q = objective.von_mises_of(s_n)
         part = objective.scaled(dev_strain, 1.0 / parts)
         ok = True
         for _ in range(parts):
-            p_0, s_0, two_g = p, s, 2.0 * ratio * a * max(p, p_min)
+            p_0, q_0, two_g = p, q, 2.0 * ratio * a * max(p, p_min)
             p, s, pc, x, eq, sub_state, converged = increment(p, s, pc, strain / parts, part, a, ratio, b, m2, p_min)
+            q = objective.von_mises_of(s)
             ok = ok and converged
             if sub_state != ELASTIC:
                 state = sub_state
                 # sigma : d eps_p, compression positive p with compression positive x
-                work += p * x + objective.von_mises_of(s) * eq
-            stored += elastic_work(p_0, s_0, p, s, strain / parts - x, two_g)
+                work += p * x + q * eq
+            stored += elastic_work(p_0, q_0, p, q, strain / parts - x, two_g)
             x_sum += x
             eq_sum += eq
         if ok:
