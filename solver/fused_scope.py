@@ -19,14 +19,15 @@ def supports(scene) -> bool:
     are fused with the mass-gradient normals ([R] 5.12, scattered by the fused P2G; the density
     gradient's cell pass reads the particles apart) and without conduction (the fields'
     exchange and the frictional heat enter T~_I^{t+dt} before the particles take it, as the
-    frictional walls' do); rigid bodies, which contact also meets, are not fused at all, nor
-    saturated soils (solver/pore_fluid.py)."""
+    frictional walls' do); rigid bodies, which contact also meets, are not fused at all. A
+    saturated soil's pore passes form their own stencils (solver/pore_kernels.py), on the
+    grid's one field: not with contact fields."""
     method = scene.method
     return (method.formulation == "ulmpm" and method.scheme in ("usl", "musl")
             and method.shape_function in FUSED_SHAPES and not scene.axisymmetric
             and scene.dimension in (2, 3)
             and not any(m.model == "rigid" for m in scene.materials.values())
-            and not saturated(scene)   # the pore fluid's passes read the stored stencil
+            and not (saturated(scene) and scene.contact.fields)   # its passes know one field
             and (method.scheme == "musl" or not conducts(scene))
             and not (conducts(scene) and _friction_walls(scene))   # their heat enters T~ before the remap
             and (not scene.contact.fields or _fused_contact(scene))

@@ -27,14 +27,19 @@ split into two explicit parts a step:
   only in the gradient leaves them at a share of their start pressure forever).
 
 The same P2G adds the pore pressure's share of the internal force, sum_p V_p p_p grad phi_I.
-Runs on the general backend's stored stencil (solver/fused_scope.py steps such scenes
-there): a dry scene runs exactly as before, with nothing of this compiled or allocated.
+The passes read the general backend's stored stencil, or, on the fused backend, form each
+particle's stencil themselves at x_p^t, which the hook keeps a copy of for the step
+(solver/pore_kernels.py): the same weights either way. A dry scene runs exactly as before,
+with nothing of this compiled or allocated.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import NamedTuple
+
 import numpy as np
 
-from solver import pore_kernels
+from solver import pore_kernels, shape
 from solver.geometry import ring
 from solver.pore_fluid_schema import diffusion_time_step, initial_pore_pressure, mobility, saturated
 from solver.state import grid_geometry
@@ -94,7 +99,21 @@ class PoreFluid:
         self.change = np.zeros(n)
         self.squeeze = np.zeros(n)
         self.held = sim.domain.owned(self._held_whole, sim.grid)
+        self.start = np.zeros((0, sim.scene.dimension))   # x_p^t, where the backend stores no stencil
+        f = sim.frame
+        support = shape.REGISTRY[sim.scene.method.shape_function].support   # (an empty array of its rank)
+        self._at = (np.empty((0,) * support), sim.spec[0], (f.lower, f.inv_h, f.cells, f.strides, int(f.offset)))
         return self
+
+    def _passes(self, sim) -> "_Passes":
+        """The four passes on the step's stencil: the stored one, or one formed at x_p^t."""
+        if sim.stencil is not None:
+            s = sim.stencil
+            return _Passes(pore_kernels.pressure_to_grid, pore_kernels.darcy_to_grid, pore_kernels.squeeze_to_grid,
+                           pore_kernels.take_change, (s.idx, s.w, s.dw), (s.idx, s.dw), (s.idx, s.w), (s.idx, s.w))
+        at = (*self._at, self.start)
+        return _Passes(pore_kernels.pressure_to_grid_at, pore_kernels.darcy_to_grid_at,
+                       pore_kernels.squeeze_to_grid_at, pore_kernels.take_change_at, at, at, at, at)
 
     def begin_step(self, sim, t_end: float) -> None:
         self.dt = t_end - sim.time   # (USF's P2G of the forces is told no dt)
@@ -105,11 +124,16 @@ class PoreFluid:
         """The pore pressure's force on the grid, and the step's flow into the particles' p.
         With slabs, each scatter's ghost nodes are summed into their owners, which compute
         the nodal pressure (shared back for Darcy's gradient) and the change (shared at end_step)."""
-        p, s, x = sim.particles, sim.stencil, sim.particles.extra
+        p, x = sim.particles, sim.particles.extra
+        if sim.stencil is None:   # (x_p^t: the passes after G2P need the step's first positions)
+            if self.start.shape != p.x.shape:
+                self.start = np.empty_like(p.x)
+            np.copyto(self.start, p.x)
+        passes = self._passes(sim)
         pressure = x["pore_pressure"]
         self.storage.fill(0.0)
-        pore_kernels.pressure_to_grid(s.idx, s.w, s.dw, p.volume, x["pore_compliance"], pressure, self.storage,
-                                      sim.grid.force)   # (the force's ghosts: the mechanics sums them next)
+        passes.pressure(*passes.on_pressure, p.volume, x["pore_compliance"], pressure, self.storage,
+                        sim.grid.force)   # (the force's ghosts: the mechanics sums them next)
         if sim.axisymmetry is not None:   # the hoop term of p's force; Darcy's and the squeeze's weak forms
             sim.axisymmetry.add_pore_pressure_force(sim, pressure)   # take the rings' volumes and L_thth as they are
         sim.domain.sum_ghosts(self.storage)
@@ -121,8 +145,8 @@ class PoreFluid:
         sim.domain.share_nodes(self.grid_pressure)
         self.inflow.fill(0.0)
         # b of Darcy's law: the step's body acceleration (gravity and the body force), as the mixture's
-        pore_kernels.darcy_to_grid(s.idx, s.dw, self.grid_pressure, x["pore_mobility"], x["pore_fluid_density"],
-                                   sim.phases.acceleration, p.volume, x["darcy_flux"], self.inflow)
+        passes.darcy(*passes.on_darcy, self.grid_pressure, x["pore_mobility"], x["pore_fluid_density"],
+                     sim.phases.acceleration, p.volume, x["darcy_flux"], self.inflow)
         sim.domain.sum_ghosts(self.inflow)
         np.divide(self.dt * self.inflow, self.storage[:, 0], out=self.change, where=stored)
         self.change[~stored] = 0.0
@@ -131,10 +155,11 @@ class PoreFluid:
 
     def after_stress(self, sim, dt: float) -> None:
         """The skeleton's part, from the L_p the stress took: squeeze_I = sum_p phi_I V_p tr(L_p)."""
-        p, s, x = sim.particles, sim.stencil, sim.particles.extra
+        p, x = sim.particles, sim.particles.extra
+        passes = self._passes(sim)
         self.squeeze.fill(0.0)
-        self.work += dt * pore_kernels.squeeze_to_grid(s.idx, s.w, p.volume, p.L, x["pore_compliance"],
-                                                       x["pore_pressure"], self.squeeze)
+        self.work += dt * passes.squeeze(*passes.on_squeeze, p.volume, p.L, x["pore_compliance"], x["pore_pressure"],
+                                         self.squeeze)
 
     def end_step(self, sim, dt: float) -> None:
         """S_I dp_I = -dt squeeze_I (0 on the drained nodes) joins the flow's change, and the
@@ -146,8 +171,8 @@ class PoreFluid:
         squeeze[~self.stored] = 0.0
         self.change -= dt * squeeze
         sim.domain.share_nodes(self.change)   # (the owners' values: a ghost's sums were partial)
-        s, x = sim.stencil, sim.particles.extra
-        pore_kernels.take_change(s.idx, s.w, self.change, x["pore_compliance"], x["pore_pressure"])
+        passes, x = self._passes(sim), sim.particles.extra
+        passes.take(*passes.on_take, self.change, x["pore_compliance"], x["pore_pressure"])
 
     def undrained_speed(self, wave_speed: float) -> float:
         """The fastest wave with the fluid's stiffness added: sqrt(c^2 + (K_w / n) / rho)."""
@@ -155,6 +180,18 @@ class PoreFluid:
 
     def stable_time_step(self, cfl: float) -> float:
         return cfl * self.diffusion_limit
+
+
+class _Passes(NamedTuple):
+    """The pore kernels of one stencil source and the arguments that give each its stencil."""
+    pressure: Callable
+    darcy: Callable
+    squeeze: Callable
+    take: Callable
+    on_pressure: tuple
+    on_darcy: tuple
+    on_squeeze: tuple
+    on_take: tuple
 
 
 def make(sim):

@@ -1,6 +1,7 @@
 """Saturated soil (solver/pore_fluid.py): validation of `pore_fluid`, `initial_pore_pressure`
 and the `pore_pressure` conditions, nothing of it in a dry scene, the time step's limits,
-the initial state (hydrostatic pressure, geostatic effective stress) and the output fields."""
+the initial state (hydrostatic pressure, geostatic effective stress), the output fields, and the
+fused backend's step against the general one."""
 from __future__ import annotations
 
 import numpy as np
@@ -119,3 +120,45 @@ class TestState:
         assert np.max(np.abs(moved)) < head * 0.25
         assert abs(np.mean(moved)) < 0.005 * head * 0.5   # (the mean start pressure is head * 0.5)
         assert np.max(np.abs(sim.particles.v)) < 1e-6
+
+
+class TestBackends:
+    @staticmethod
+    def flowing(method: dict) -> dict:
+        """A block falling towards a slip floor, drained along a box of nodes at its top and starting
+        at 10 kPa, so that the flow, the squeeze and the force all act; half a cell clear of the
+        grid's other ends (quadratic B-splines need it)."""
+        fluid = {**WATER, "bulk_modulus": 1.0e7, "hydraulic_conductivity": 1.0e-3}
+        data = scene(material={**SOIL, "cohesion": 1.0e3, "pore_fluid": fluid}, gravity=[0.0, -9.81],
+                     body={"initial_pore_pressure": {"type": "uniform", "pressure": 1.0e4},
+                           "geometry": {"type": "box", "lower": [0.1, 0.1], "upper": [0.9, 0.8]}},
+                     conditions=[{"type": "wall", "face": "y-", "mode": "slip"},
+                                 {"type": "pore_pressure", "where": {"type": "box", "lower": [0.0, 0.75],
+                                                                     "upper": [1.0, 0.85]}, "pressure": 0.0}],
+                     method=method)
+        data["grid"] = {"lower": [0.0, 0.0], "upper": [1.0, 1.0], "cell_size": 0.1}
+        return data
+
+    @pytest.mark.parametrize("method", [{"scheme": "musl", "shape_function": "linear"},
+                                        {"scheme": "usl", "shape_function": "quadratic_bspline", "transfer": "pic"}])
+    def test_a_saturated_soil_steps_fused_and_gives_the_general_backends_answer(self, method):
+        """The fused backend's pore passes form each particle's weights at x_p^t, the general
+        backend's read them stored: the same weights to the bit (solver/pore_kernels.py). The
+        mechanics' kernels differ in the order of some sums (tests/unit/test_fused.py): 1e-12
+        relative after 100 steps, the bound test_fused holds them to."""
+        loaded = load_scene(self.flowing(method))
+        fused, general = ExplicitMPM(loaded), ExplicitMPM(loaded, general=True)
+        assert fused.fused and not general.fused
+        dt = fused.stable_time_step(0.5)
+        for _ in range(100):
+            fused.advance(dt)
+            general.advance(dt)
+        a, b = fused.particles, general.particles
+        start = np.full(b.count, 1.0e4)
+        assert np.max(np.abs(b.extra["pore_pressure"] - start)) > 1.0e3   # it drained and squeezed
+        assert np.max(np.abs(b.v)) > 1e-3                                  # and moved
+        for name in ("x", "v", "stress"):
+            assert np.max(np.abs(getattr(a, name) - getattr(b, name))) <= 1e-12 * np.max(np.abs(getattr(b, name)))
+        for name in ("pore_pressure", "darcy_flux"):
+            assert np.max(np.abs(a.extra[name] - b.extra[name])) <= 1e-12 * np.max(np.abs(b.extra[name])), name
+        assert fused.pore_work() == pytest.approx(general.pore_work(), rel=1e-10)
