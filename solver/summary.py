@@ -16,6 +16,7 @@ from pydantic import BaseModel, Field
 
 from solver import cost, materials, stability
 from solver import shape as shape_functions
+from solver.pore_fluid_schema import saturated
 from solver.scene import Scene
 from solver.schema import count_up
 from solver.series import MAX_SERIES_POINTS
@@ -135,7 +136,9 @@ def particle_bytes(scene: Scene) -> int:
     (solver/materials/registry.py state_values); the reference position where TLMPM, a
     body force or the `reference_position` output field needs it (and TLMPM's first Piola stress); C_p of APIC and MLS; the fused
     backend's v_pic of MUSL's remap (allocated for any scheme), or the general backend's
-    stored stencil: the weights, weight gradients and node indices of the nodes it touches."""
+    stored stencil: the weights, weight gradients and node indices of the nodes it touches;
+    a saturated soil's pore pressure, Darcy flux and three fluid constants (solver/pore_fluid.py),
+    and on the fused backend the step's first positions its passes form their weights at."""
     from solver.loads import BodyLoads
 
     dim = scene.dimension
@@ -147,7 +150,10 @@ def particle_bytes(scene: Scene) -> int:
         values += dim
     if scene.method.transfer in _AFFINE_TRANSFERS:
         values += dim * dim
-    if cost.backend_name(scene) == "fused":
+    fused = cost.backend_name(scene) == "fused"
+    if saturated(scene):
+        values += 4 + dim + (dim if fused else 0)
+    if fused:
         values += dim
     else:
         touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
@@ -159,9 +165,10 @@ def node_bytes(scene: Scene, threads: int) -> int:
     """Bytes per grid node (of one velocity field): mass, momentum, force, v_old and v_new
     (solver/state.py Grid), the copies of mass, momentum and force each thread beyond the
     first adds into (solver/threads.py ScatterCopies), the domain's 1-byte mask of active
-    nodes; with contact "friction" each body's field and its presence and normal (1 + dim)."""
+    nodes; with contact "friction" each body's field and its presence and normal (1 + dim); a
+    saturated soil's six nodal values (solver/pore_fluid.py PoreFluid.place)."""
     dim = scene.dimension
-    per_field = 8 * (1 + 4 * dim) + 8 * (threads - 1) * (1 + 2 * dim)
+    per_field = 8 * (1 + 4 * dim) + 8 * (threads - 1) * (1 + 2 * dim) + (8 * 6 if saturated(scene) else 0)
     return scene.grid_fields() * (per_field + (8 * (1 + dim) if scene.contact.fields else 0)) + 1
 
 

@@ -1,13 +1,13 @@
 """Saturated soil (solver/pore_fluid.py): validation of `pore_fluid`, `initial_pore_pressure`
 and the `pore_pressure` conditions, nothing of it in a dry scene, the time step's limits,
-the initial state (hydrostatic pressure, geostatic effective stress), the output fields, and the
-fused backend's step against the general one."""
+the initial state (hydrostatic pressure, geostatic effective stress), the output fields, the
+fused backend's step against the general one, and the memory the estimate counts."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from solver import fields, stability
+from solver import fields, stability, summary
 from solver.pore_fluid_schema import G_N
 from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
@@ -162,3 +162,12 @@ class TestBackends:
         for name in ("pore_pressure", "darcy_flux"):
             assert np.max(np.abs(a.extra[name] - b.extra[name])) <= 1e-12 * np.max(np.abs(b.extra[name])), name
         assert fused.pore_work() == pytest.approx(general.pore_work(), rel=1e-10)
+
+    @pytest.mark.parametrize("general", [False, True])
+    def test_the_memory_estimate_counts_the_pore_state(self, general):
+        """Per particle: p, the Darcy flux (dim), three fluid constants, and on the fused backend the
+        step's first positions (dim); per node: the six nodal arrays (solver/pore_fluid.py)."""
+        method = {"shape_function": "gimp"} if general else {}
+        wet, dry = load_scene(scene(method=method)), load_scene(scene(material=SOIL, method=method))
+        assert summary.particle_bytes(wet) - summary.particle_bytes(dry) == 8 * (4 + 2 + (0 if general else 2))
+        assert summary.node_bytes(wet, 1) - summary.node_bytes(dry, 1) == 8 * 6
