@@ -90,4 +90,4 @@ class AbsorbingFaces:
     def after_g2p(self, sim, dt: float) -> None:
         """The grid velocities of this step are constrained by now (as for damping)."""
         for nodes, _, _, _, _, out in self.faces:
-            sim.boundary_work += work(dt, nodes, out, sim.grid.v_old, sim.grid.v_new)
+            sim.work.add("boundary_work", work(dt, nodes, out, sim.grid.v_old, sim.grid.v_new))

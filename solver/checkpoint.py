@@ -29,6 +29,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from solver import energy
 from solver.errors import SolverError
 from solver.results import RESULT_FILE, ResultWriter, list_frames
 
@@ -72,15 +73,11 @@ class Restart:
     dt: float
     frame_next: int
     frames_written: int
-    external_work: float
-    boundary_work: float
-    damping_work: float
+    work: dict[str, float]       # the work terms' totals over the processes, by name (energy.WorkLedger)
     particles: dict[str, np.ndarray]
     series: dict[str, np.ndarray]
     boundary_heat: float = 0.0   # heat in through heat_flux and convection faces (solver/thermal.py)
-    tool_work: float = 0.0       # the tools' work, and where they are (solver/tools.py's state())
-    pore_work: float = 0.0       # the pore pressure's work on the mixture (solver/pore_fluid.py)
-    tools: dict[str, np.ndarray] | None = None
+    tools: dict[str, np.ndarray] | None = None   # where the tools are (solver/tools.py's state())
     derived: tuple[str, ...] = ()   # the particle arrays that were a function of the state (Particles.derived)
 
 
@@ -127,8 +124,7 @@ class Checkpointer:
         dt, frame_next, frames_written, rows = self._mark
         particles = sim.domain.gather(sim.particles.arrays())   # all processes' particles, on rank 0
         heat = sim.thermal_series()   # (collective: every process sums its boundary heat)
-        tool_work = float(sim.domain.sum([sim.tool_work])[0])   # (collective: each counts its particles)
-        pore_work = sim.pore_work()   # (collective too)
+        work = sim.work.totals(sim.domain)   # (collective too: each process holds its share)
         tools = sim.tools.state() if sim.tools is not None else None   # (collective too)
         self.last_step, self.last_time = sim.step_count, time.monotonic()
         if particles is None:
@@ -138,10 +134,8 @@ class Checkpointer:
             with h5py.File(tmp, "w", locking=False) as h5:
                 h5.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, scene=self.scene_json,
                                 step=sim.step_count, time=sim.time, dt=dt, frame_next=frame_next,
-                                frames_written=frames_written, external_work=sim.external_work,
-                                boundary_work=sim.boundary_work, damping_work=sim.damping_work,
+                                frames_written=frames_written, **work,
                                 **({"boundary_heat": heat["boundary_heat"]} if heat else {}),
-                                tool_work=tool_work, pore_work=pore_work,
                                 derived=",".join(sim.particles.derived_names))
                 for name, values in (tools or {}).items():
                     h5.create_dataset(f"tools/{name}", data=values)
@@ -200,12 +194,8 @@ def load(out_dir: Path, scene) -> Restart | None:
         raise CheckpointError(f"the checkpoint in {out_dir} is of another scene")
     restart = Restart(step=int(attrs["step"]), time=float(attrs["time"]), dt=float(attrs["dt"]),
                       frame_next=int(attrs["frame_next"]), frames_written=int(attrs["frames_written"]),
-                      external_work=float(attrs["external_work"]),
-                      boundary_work=float(attrs["boundary_work"]),
-                      damping_work=float(attrs.get("damping_work", 0.0)), particles=particles, series=series,
-                      boundary_heat=float(attrs.get("boundary_heat", 0.0)),
-                      tool_work=float(attrs.get("tool_work", 0.0)), tools=tools,
-                      pore_work=float(attrs.get("pore_work", 0.0)),
+                      work=_work_totals(attrs, scene), particles=particles, series=series,
+                      boundary_heat=float(attrs.get("boundary_heat", 0.0)), tools=tools,
                       derived=tuple(name for name in str(attrs.get("derived", "")).split(",") if name))
     source = _result_to_continue(Path(out_dir))
     try:
@@ -218,6 +208,16 @@ def load(out_dir: Path, scene) -> Restart | None:
                     complete, restart.frames_written)
         return None
     return restart
+
+
+# a work term's attribute in checkpoints written before the WorkLedger kept it by its term's name
+_EARLIER_NAMES = {"pore_pressure_work": "pore_work"}
+
+
+def _work_totals(attrs: dict, scene) -> dict[str, float]:
+    """The scene's work terms' totals, each an attribute of its term's name."""
+    names = [t.name for t in energy.terms(scene) if t.kind == energy.WORK]
+    return {name: float(attrs.get(name, attrs.get(_EARLIER_NAMES.get(name, name), 0.0))) for name in names}
 
 
 def _read_group(group: h5py.Group) -> dict[str, np.ndarray]:
@@ -250,13 +250,9 @@ def _restore(sim, restart: Restart) -> None:
     sim.domain.distribute(p)
     sim.place()
     sim.time, sim.step_count = restart.time, restart.step
-    sim.external_work, sim.boundary_work = restart.external_work, restart.boundary_work
-    sim.damping_work = restart.damping_work
-    sim.tool_work = restart.tool_work if sim.domain.is_root else 0.0   # (one process keeps the total)
+    sim.work.restore(restart.work, keeps=sim.domain.is_root)   # (one process keeps each total)
     if sim.tools is not None and restart.tools is not None:
         sim.tools.restore(restart.tools, sim.domain.is_root)
-    if sim.pore_fluid is not None:   # (one process keeps the total)
-        sim.pore_fluid.work = restart.pore_work if sim.domain.is_root else 0.0
     if sim.conduction is not None:   # the total, kept by one process (the series sums them)
         sim.conduction.boundary_heat = restart.boundary_heat if sim.domain.is_root else 0.0
 

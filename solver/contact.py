@@ -473,7 +473,7 @@ class FieldContact:
                        self.sim.rigid.velocity, self.friction, self.flat, record, self.owned, self.node_volume,
                        self.impulse, self.pair_impulse, self.totals, self.sim.friction_heat)
         if record:
-            self.sim.friction_work += float(self.totals[1])
+            self.sim.work.add("friction_work", float(self.totals[1]))
             self._elapsed += self._dt
         return float(self.totals[0])
 

@@ -59,4 +59,4 @@ class Damping:
 
     def after_g2p(self, sim, dt: float) -> None:
         """The grid velocities of this step are constrained by now (MUSL's remap comes later)."""
-        sim.damping_work += work(dt, self.force, sim.grid.v_old, sim.grid.v_new)
+        sim.work.add("damping_work", work(dt, self.force, sim.grid.v_old, sim.grid.v_new))

@@ -10,7 +10,9 @@ rigid bodies, damping, friction, tools, a pore fluid's pressure). Energy is cons
 and `energy_error` = balance - initial is what the discretisation (and any process
 no term counts yet) made or lost. A physics that stores
 or exchanges energy registers its term here once (`register`): the series, the
-growth check and every display of the balance then include it.
+growth check and every display of the balance then include it. The work terms are
+kept in the simulation's WorkLedger (`sim.work`), which the phases and hooks add to and
+checkpoints keep, each by its term's name.
 """
 from __future__ import annotations
 
@@ -44,20 +46,25 @@ def _strain(sim) -> float:
     return sum(material.strain_energy(sim.particles, sl) for material, sl in sim.materials)
 
 
+def _ledger(name: str) -> Callable[[Any], float]:
+    """A WORK term's local share: its entry of the simulation's WorkLedger."""
+    return lambda sim: sim.work[name]
+
+
 TERMS: list[Term] = [
     Term("kinetic_energy", STORED, _kinetic),
     Term("strain_energy", STORED, _strain),
     Term(plastic_work.NAME, DISSIPATED, plastic_work.local, plastic_work.present),   # the return mappings
-    Term("external_work", WORK, lambda sim: sim.external_work),     # gravity, body forces, loads
-    Term("boundary_work", WORK, lambda sim: sim.boundary_work),     # walls, velocity conditions, rigid bodies
-    Term("damping_work", WORK, lambda sim: sim.damping_work, lambda scene: scene.damping is not None),
-    Term("friction_work", WORK, lambda sim: sim.friction_work, lambda scene: frictional(scene)),   # solver/contact.py
-    Term("tool_work", WORK, lambda sim: sim.tool_work, lambda scene: bool(scene.tools)),   # solver/tools.py
+    Term("external_work", WORK, _ledger("external_work")),     # gravity, body forces, loads
+    Term("boundary_work", WORK, _ledger("boundary_work")),     # walls, velocity conditions, rigid bodies
+    Term("damping_work", WORK, _ledger("damping_work"), lambda scene: scene.damping is not None),
+    Term("friction_work", WORK, _ledger("friction_work"), lambda scene: frictional(scene)),   # solver/contact.py
+    Term("tool_work", WORK, _ledger("tool_work"), lambda scene: bool(scene.tools)),   # solver/tools.py
     Term("tool_penalty_energy", STORED, lambda sim: sim.tools.stored_energy(sim), lambda scene: bool(scene.tools)),
     # a saturated soil's pore pressure on the mixture, sum dt sum_p V_p p_p tr(L_p) (solver/pore_fluid.py):
     # negative while the skeleton compresses, the share of the loads' work the pore water takes
     # (stored in it while undrained, dissipated by Darcy flow as it drains)
-    Term("pore_pressure_work", WORK, lambda sim: sim.pore_fluid.work, saturated),
+    Term("pore_pressure_work", WORK, _ledger("pore_pressure_work"), saturated),
 ]
 
 
@@ -73,6 +80,33 @@ def register(term: Term) -> None:
 
 def terms(scene) -> list[Term]:
     return [t for t in TERMS if t.present(scene)]
+
+
+class WorkLedger:
+    """The work done on the bodies since t = 0, by the name of its WORK term: this process's
+    share of each, which the phases and hooks add to as they do the work (`measure` sums the
+    shares over the processes). A checkpoint keeps the totals (`totals`); a resumed run gives
+    each total to one process and nothing to the others (`restore`), so that the sums go on
+    from them."""
+
+    def __init__(self, scene):
+        self._shares = {t.name: 0.0 for t in terms(scene) if t.kind == WORK}
+
+    def add(self, name: str, value: float) -> None:
+        self._shares[name] += value
+
+    def __getitem__(self, name: str) -> float:
+        return self._shares[name]
+
+    def totals(self, domain) -> dict[str, float]:
+        """Every term's total over the processes (collective: every process calls it)."""
+        names = list(self._shares)
+        return {name: float(v) for name, v in zip(names, domain.sum([self._shares[n] for n in names]))}
+
+    def restore(self, totals: dict[str, float], keeps: bool) -> None:
+        """The totals of a checkpoint, kept by this process where `keeps` (one process), else zeros."""
+        for name in self._shares:
+            self._shares[name] = float(totals.get(name, 0.0)) if keeps else 0.0
 
 
 @dataclass

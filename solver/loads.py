@@ -104,7 +104,7 @@ class AppliedLoads:
 
     def end_step(self, sim, dt: float) -> None:
         if self.rows.size:
-            sim.external_work += dt * float(np.sum(self.force * sim.particles.v[self.rows]))
+            sim.work.add("external_work", dt * float(np.sum(self.force * sim.particles.v[self.rows])))
 
 
 def spread_forces(sim, rows: np.ndarray, force: np.ndarray) -> None:

@@ -87,9 +87,6 @@ class PoreFluid:
         self.wave_squared = max(m.pore_fluid.storage_modulus / m.density
                                 for m in scene.materials.values() if getattr(m, "pore_fluid", None) is not None)
         self._held_whole = held_node_values(scene, grid_geometry(scene), "pore_pressure", "pressure")
-        # the pore pressure's work on the mixture, sum dt sum_p V_p p_p tr(L_p) (J): energy the fluid
-        # gave the mechanics (its stored energy, the flow), which the runner's energy check counts as supplied
-        self.work = 0.0
 
     def place(self, sim) -> "PoreFluid":
         n = sim.grid.mass.shape[0]
@@ -158,8 +155,10 @@ class PoreFluid:
         p, x = sim.particles, sim.particles.extra
         passes = self._passes(sim)
         self.squeeze.fill(0.0)
-        self.work += dt * passes.squeeze(*passes.on_squeeze, p.volume, p.L, x["pore_compliance"], x["pore_pressure"],
-                                         self.squeeze)
+        # the pore pressure's work on the mixture, sum dt sum_p V_p p_p tr(L_p) (J): energy the fluid
+        # gave the mechanics (its stored energy, the flow), which the runner's energy check counts as supplied
+        power = passes.squeeze(*passes.on_squeeze, p.volume, p.L, x["pore_compliance"], x["pore_pressure"], self.squeeze)
+        sim.work.add("pore_pressure_work", dt * power)
 
     def end_step(self, sim, dt: float) -> None:
         """S_I dp_I = -dt squeeze_I (0 on the drained nodes) joins the flow's change, and the

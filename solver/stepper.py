@@ -84,11 +84,7 @@ class ExplicitMPM:
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
         self.time = 0.0
         self.step_count = 0
-        self.external_work = 0.0
-        self.boundary_work = 0.0
-        self.damping_work = 0.0
-        self.friction_work = 0.0
-        self.tool_work = 0.0
+        self.work = energy.WorkLedger(scene)   # the work terms, this process's share (solver/energy.py)
         self.scheme = step.SCHEMES[method.scheme]
         self.phases = step.backend_for(scene, general)(self)
         self.added_hooks = []   # hooks given by add_hook, kept when the grid is placed again
@@ -214,13 +210,6 @@ class ExplicitMPM:
         if self.expansion is None:
             return 0.0
         return float(self.domain.sum([self.expansion.energy_bound(self)])[0])
-
-    def pore_work(self) -> float:
-        """The work the pore pressure of a saturated soil has done on the mixture so far (solver/pore_fluid.py),
-        summed over the processes (a checkpoint keeps it); 0 in a dry scene."""
-        if self.pore_fluid is None:
-            return 0.0
-        return float(self.domain.sum([self.pore_fluid.work])[0])
 
     def thermal_series(self) -> dict[str, float]:
         """thermal_energy (sum m c T) and the heat that came in through heat_flux and

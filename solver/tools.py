@@ -403,7 +403,8 @@ class Tools:
         for (i, rows, force), normal_force in zip(self.pushed, self.normal_forces):
             self.impulse[i] += dt * force.sum(axis=0)
             friction = force - normal_force   # (0 bit for bit without friction)
-            sim.tool_work += dt * (float(np.sum(normal_force * self.velocity[i])) + float(np.sum(friction * v[rows])))
+            sim.work.add("tool_work", dt * (float(np.sum(normal_force * self.velocity[i]))
+                                        + float(np.sum(friction * v[rows]))))
         self.displacement += dt * self.velocity
         self.elapsed += dt
 

@@ -111,7 +111,7 @@ class GridConditions:
                 self.reactions.record(c, mass_f, v_f)
             work += kernels.apply_dirichlet(c.node, c.axis, c.value, mass_f, v_f)
         if record:
-            self.sim.friction_work += float(self._dissipated[0])
+            self.sim.work.add("friction_work", float(self._dissipated[0]))
         return work
 
     def end_step(self, sim, dt: float) -> None:
@@ -132,7 +132,7 @@ class ExternalWork:
 
     def end_step(self, sim, dt: float) -> None:
         p = sim.particles
-        sim.external_work += dt * kernels.external_power(p.mass, sim.phases.acceleration, p.v)
+        sim.work.add("external_work", dt * kernels.external_power(p.mass, sim.phases.acceleration, p.v))
 
 
 def _rigid_bodies(sim):

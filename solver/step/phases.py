@@ -80,7 +80,7 @@ class Phases:
             hook(sim, dt)
         self._integrate(dt)
         self._constrain(g.v_old)
-        sim.boundary_work += self._constrain(g.v_new, record=True)
+        sim.work.add("boundary_work", self._constrain(g.v_new, record=True))
         sim.domain.share_nodes(g.v_old, g.v_new)   # (owners' values to ghost nodes)
 
     def _integrate(self, dt: float) -> None:

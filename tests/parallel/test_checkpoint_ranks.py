@@ -20,6 +20,7 @@ import numpy as np
 
 from ranks import SCENE_2D, last_frame, relative_difference, run_cli, scene
 from solver.checkpoint import CHECKPOINT_FILE
+from solver.results import read_series
 
 TOLERANCE = 1e-12
 CASE = scene(SCENE_2D, time__end=0.4, output__frames=5, output__checkpoint={"every_steps": 20})
@@ -62,3 +63,11 @@ def test_a_killed_two_process_run_resumes_from_its_checkpoint(tmp_path):
     assert np.array_equal(got["fields"]["id"], want["fields"]["id"])
     for field in ("position", "velocity", "stress"):
         assert relative_difference(want["fields"][field], got["fields"][field]) <= TOLERANCE, field
+    # the work terms go on from the checkpoint's totals, summed over the processes that wrote it
+    want_series, got_series = read_series(reference / "result.h5"), read_series(out / "result.h5")
+    assert np.array_equal(got_series["time"], want_series["time"])
+    assert np.max(np.abs(want_series["external_work"])) > 1e-3   # gravity did work
+    for name in ("external_work", "boundary_work", "kinetic_energy", "energy_error"):
+        scale = np.max(np.abs(want_series["total_energy"]))
+        assert np.max(np.abs(got_series[name] - want_series[name])) <= 1e-9 * scale, name
+

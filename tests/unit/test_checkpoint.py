@@ -250,3 +250,14 @@ def test_a_run_with_a_tool_resumes_to_the_same_result(tmp_path, monkeypatch):
     reference = assert_resumes_alike(scene, tmp_path, monkeypatch)
     series = read_series(reference.result_path)
     assert series["reaction_press_y"].max() > 0 and series["tool_work"][-1] != 0   # the tool did push
+
+
+def test_a_run_on_a_frictional_floor_resumes_to_the_same_friction_work(tmp_path, monkeypatch):
+    """The friction's work is carried (it was left out: a resumed run's friction_work started
+    again from zero, and its energy_error jumped by what the friction had taken). A stiffer
+    column than the others': the soft one on this floor stops as unstable with FLIP at cfl 0.4."""
+    scene = column()
+    scene["materials"]["m"]["youngs_modulus"] = 2.0e6
+    scene["boundary_conditions"] = [{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.3}]
+    reference = assert_resumes_alike(scene, tmp_path, monkeypatch)
+    assert read_series(reference.result_path)["friction_work"][-1] < 0   # the floor took energy out

@@ -107,7 +107,7 @@ def test_fused_step_gives_the_general_step(dimension, method):
         assert relative_difference(getattr(a, name), getattr(b, name)) <= TOLERANCE, name
     if METHODS[method]["transfer"] in ("apic", "mls"):
         assert relative_difference(a.extra["affine"], b.extra["affine"]) <= TOLERANCE
-    assert fast.boundary_work == pytest.approx(general.boundary_work, rel=1e-9, abs=1e-12)
+    assert fast.work["boundary_work"] == pytest.approx(general.work["boundary_work"], rel=1e-9, abs=1e-12)
 
 
 @pytest.mark.parametrize("change,expected", [
@@ -181,7 +181,7 @@ def test_fused_step_folds_the_force_into_the_momentum_only_where_nothing_reads_i
         assert relative_difference(getattr(a, name), getattr(b, name)) <= TOLERANCE, name
     if method["transfer"] != "flip":
         assert relative_difference(a.extra["affine"], b.extra["affine"]) <= TOLERANCE
-    assert folded.boundary_work == pytest.approx(unfolded.boundary_work, rel=1e-9, abs=1e-12)
+    assert folded.work["boundary_work"] == pytest.approx(unfolded.work["boundary_work"], rel=1e-9, abs=1e-12)
 
 
 def test_a_hook_added_after_placement_is_in_the_plan():

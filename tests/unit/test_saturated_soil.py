@@ -161,7 +161,7 @@ class TestBackends:
             assert np.max(np.abs(getattr(a, name) - getattr(b, name))) <= 1e-12 * np.max(np.abs(getattr(b, name)))
         for name in ("pore_pressure", "darcy_flux"):
             assert np.max(np.abs(a.extra[name] - b.extra[name])) <= 1e-12 * np.max(np.abs(b.extra[name])), name
-        assert fused.pore_work() == pytest.approx(general.pore_work(), rel=1e-10)
+        assert fused.work["pore_pressure_work"] == pytest.approx(general.work["pore_pressure_work"], rel=1e-10)
 
     @pytest.mark.parametrize("general", [False, True])
     def test_the_memory_estimate_counts_the_pore_state(self, general):

@@ -97,7 +97,7 @@ def sliding_heat(support: str, end: float = 0.3, start: float = 0.1, **method) -
 
     def state():
         centre = float(np.sum(p.mass[block] * p.x[block, 0]) / mass)
-        return centre, sim.thermal_series()["thermal_energy"], -sim.friction_work
+        return centre, sim.thermal_series()["thermal_energy"], -sim.work["friction_work"]
 
     dt = sim.stable_time_step(0.5)
     initial = sim.energies().balance

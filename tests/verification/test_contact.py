@@ -80,7 +80,7 @@ def coulomb(theta_deg, mu):
 def test_block_slides_at_the_coulomb_acceleration(support):
     t, v, sim = block_motion(incline(30, 0.3, support))
     assert fitted_acceleration(t, v) == pytest.approx(coulomb(30, 0.3), rel=0.01)
-    assert sim.friction_work < 0.0   # friction took energy out of the sliding
+    assert sim.work["friction_work"] < 0.0   # friction took energy out of the sliding
 
 
 @pytest.mark.parametrize("support", ["wall", "rigid"])
