@@ -3,8 +3,10 @@ saturated particles, serial (free of races without per-thread copies). Each come
 on the general backend's stored stencil (idx, w, dw at x_p^t: `pressure_to_grid` ...), and,
 for the fused backend, which stores none, with each particle's weights formed in the pass
 from x_p^t (`pressure_to_grid_at` ...: `_stencil_at`), the same bits as the stored ones for
-linear hats and quadratic B-splines, and 1.5-3x faster than reading them (2D layer, 80,000
-particles: benchmarks/two_phase.py).
+linear hats and quadratic B-splines. The four cost what the stored-stencil passes do (0.97x
+in 2D, 0.87x in 3D on benchmarks/two_phase.py's layers); what they save is the stencil the
+fused mechanics would otherwise store and read. The weights are tuples, which stay in
+registers: formed into per-particle scratch rows instead, the passes were 5-8x slower.
 
 The nodal array `storage` is (n_nodes, 2): the storage S_I = sum_p phi_I V_p n_p / K_w and
 the storage-weighted pressure sum_p phi_I V_p (n_p / K_w) p_p; `inflow` is the flux rate
