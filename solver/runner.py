@@ -147,9 +147,9 @@ def run(
 
 
 def _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds) -> Result:
-    sim = make_simulation(scene)
-    compiling.start_helper(sim.threads)
-    loop = _TimeLoop(scene, sim, started, progress, should_stop)
+    # (the loop holds the simulation alone, so that `release` lets its arrays go before the previews)
+    loop = _TimeLoop(scene, make_simulation(scene), started, progress, should_stop)
+    compiling.start_helper(loop.sim.threads)
     loop.compiling = compiling
     restart = checkpoint.resume(loop.sim, out_dir) if resume else None
     if restart is not None:
