@@ -29,6 +29,11 @@ SCENE_FIELDS = frozenset({
     "velocity_magnitude", "deformation_gradient", "strain_energy_density", "heat_flux", "particle_domain",
     "pore_pressure", "effective_stress", "reference_position",
 })
+# Of those, the ones formed from each particle's own state alone (they read sim.particles): a
+# frame forms them a block of ROW_BLOCK rows at a time (solver/fields.py FrameFields.blocks), and
+# the memory estimate counts a block (64 Ki rows: the stress's block is 3 MiB).
+ROW_LOCAL_FIELDS = frozenset({"stress", "effective_stress", "density", "pressure", "von_mises", "velocity_magnitude"})
+ROW_BLOCK = 1 << 16
 
 
 class RegisteredNames(Set):

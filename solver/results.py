@@ -18,6 +18,7 @@ a running job is still writing.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -92,8 +93,9 @@ class ResultWriter:
         """Write one snapshot as ``/frames/NNNNNN`` and flush; returns the group name.
 
         The fields are read and written one at a time: a mapping that forms each field as it is
-        read (solver/fields.py FrameFields) has one formed field alive at once, not the frame. A bad
-        field leaves no frame behind (the group is removed before the error is raised)."""
+        read (solver/fields.py FrameFields) has one formed field alive at once, not the frame, and
+        where it gives a field by `blocks` (first row, values), a block of it. A bad field leaves
+        no frame behind (the group is removed before the error is raised)."""
         self._check_open()
         missing = [key for key in REQUIRED_FIELDS if key not in fields]
         if missing:
@@ -103,10 +105,7 @@ class ResultWriter:
         try:
             count = None
             for key in fields:
-                array = self._checked_field(key, fields[key], count)
-                count = array.shape[0]
-                group.create_dataset(key, data=array)
-                del array   # (before the next field is formed)
+                count = self._write_field(group, key, fields, count)
         except ValueError:
             del self._file["frames"][name]
             raise
@@ -117,6 +116,32 @@ class ResultWriter:
         self._flush_series()
         self._file.flush()
         return name
+
+    def _write_field(self, group, key: str, fields, count: int | None) -> int:
+        """Write field `key` of `fields` as a dataset of `group`, by blocks of rows where the
+        mapping gives them (`blocks`); returns its rows (`count`: those of the fields before it)."""
+        blocks = fields.blocks(key) if hasattr(fields, "blocks") else iter([(0, fields[key])])
+        _, first = next(blocks)
+        following = next(blocks, None)
+        if following is None:   # the whole field at once
+            array = self._checked_field(key, first, count)
+            group.create_dataset(key, data=array)
+            return array.shape[0]
+        if count is None:
+            raise ValueError(f"field {key!r} comes in blocks before a field that gives the particle count")
+        array = self._checked_field(key, first, None)
+        dataset = group.create_dataset(key, shape=(count,) + array.shape[1:], dtype=array.dtype)
+        written = 0
+        for start, values in itertools.chain([(0, first), following], blocks):
+            array = self._checked_field(key, values, None)
+            if start != written or written + array.shape[0] > count:
+                raise ValueError(f"field {key!r} has more than {count} rows (one per particle)")
+            dataset[start:start + array.shape[0]] = array
+            written += array.shape[0]
+            del array, values   # (before the next block is formed)
+        if written != count:
+            raise ValueError(f"field {key!r} has {written} rows, expected {count} (one per particle)")
+        return count
 
     def _checked_field(self, key: str, value, count: int | None) -> np.ndarray:
         """The field as written (contiguous, its dtype); `count`: the rows of the fields before it."""

@@ -14,7 +14,7 @@ import math
 import numpy as np
 from pydantic import BaseModel, Field
 
-from solver import cost, materials, stability
+from solver import capabilities, cost, materials, stability
 from solver import shape as shape_functions
 from solver.pore_fluid_schema import saturated
 from solver.scene import Scene
@@ -187,8 +187,9 @@ def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
     a limit error names): arithmetic on the scene, nothing allocated. "bodies" is the particle
     arrays (particle_bytes) and each body's own objects, "grid" the grid's arrays (node_bytes,
     on the threads the run will take), "output.frames" what a frame forms (one process: the
-    widest field it derives, e.g. the stress's six components, as the writer takes the fields one
-    at a time; several: the frame gathered on rank 0)
+    widest field it derives, as the writer takes the fields one at a time, a field of each
+    particle's own state a block of rows at a time, e.g. the stress's six components; several:
+    the frame gathered on rank 0)
     and every frame's bookkeeping, "output.series" the energy and `output.series` rows (one
     column per body and axis for momentum and center_of_mass)."""
     dim = scene.dimension
@@ -198,7 +199,9 @@ def memory_estimate(scene: Scene, particles: int, nodes: int) -> dict[str, int]:
     if scene.parallel.processes > 1:
         frame = 2 * 8 * (3 + sum(field_widths.values())) * particles
     else:
-        frame = 8 * max((w for name, w in field_widths.items() if name not in _FRAME_VIEWS), default=0) * particles
+        frame = 8 * max((w * (min(particles, capabilities.ROW_BLOCK) if name in capabilities.ROW_LOCAL_FIELDS
+                              else particles)
+                         for name, w in field_widths.items() if name not in _FRAME_VIEWS), default=0)
     steps = estimate_steps(scene)
     energies = scene.output.energies
     if energies is False:

@@ -252,3 +252,37 @@ def test_xdmf_is_a_temporal_collection_pointing_at_existing_datasets(tmp_path, d
                 "deformation_gradient": "Scalar" if dimension == 1 else "Matrix",
             }
     assert not list(tmp_path.glob(".result.xdmf*"))  # the temporary file of the atomic write is gone
+
+
+class _Blocks(dict):
+    """Fields given by `blocks` of 5 rows (the last shorter), as solver/fields.py FrameFields
+    gives a field of each particle's own state."""
+
+    def blocks(self, key):
+        values = self[key]
+        if key in ("id", "body"):
+            yield 0, values
+            return
+        for start in range(0, len(values), 5):
+            yield start, values[start:start + 5]
+
+
+def test_a_field_written_in_blocks_is_the_field_written_whole(tmp_path):
+    fields = frame_fields(3, 0)
+    assert len(fields["id"]) % 5 != 0   # (a short last block)
+    for name, given in (("whole", dict(fields)), ("blocks", _Blocks(fields))):
+        with ResultWriter(tmp_path / name, small_scene(3), "test") as writer:
+            writer.write_frame(1, 0.5, given)
+    whole, blocks = read_frame(tmp_path / "whole" / "result.h5", 0), read_frame(tmp_path / "blocks" / "result.h5", 0)
+    for key, values in whole["fields"].items():
+        assert np.array_equal(blocks["fields"][key], values) and blocks["fields"][key].dtype == values.dtype, key
+
+
+def test_blocks_that_do_not_cover_the_particles_leave_no_frame(tmp_path):
+    fields = _Blocks(frame_fields(2, 0))
+    fields["stress"] = fields["stress"][:-1]
+    with ResultWriter(tmp_path, small_scene(2), "test") as writer:
+        with pytest.raises(ValueError, match="field 'stress' has .* rows, expected"):
+            writer.write_frame(1, 0.5, fields)
+        assert writer.frame_count == 0
+    assert list_frames(tmp_path / "result.h5") == []

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from solver import fields, stability, summary
+from solver import capabilities, fields, stability, summary
 from solver.pore_fluid_schema import G_N
 from solver.scene_checks import load_scene
 from solver.stepper import ExplicitMPM
@@ -120,6 +120,25 @@ class TestState:
         assert np.max(np.abs(moved)) < head * 0.25
         assert abs(np.mean(moved)) < 0.005 * head * 0.5   # (the mean start pressure is head * 0.5)
         assert np.max(np.abs(sim.particles.v)) < 1e-6
+
+
+class TestFrames:
+    def test_every_field_formed_in_blocks_of_rows_is_the_field_formed_whole(self, monkeypatch):
+        """solver/fields.py FrameFields.blocks: a field of each particle's own state is formed
+        ROW_BLOCK rows at a time (here 7, which leaves a short last block); the total stress
+        takes each row's pore pressure."""
+        data = scene(body={"initial_pore_pressure": {"type": "hydrostatic", "water_table": 1.5},
+                           "initial_stress": {"type": "geostatic", "k0": 0.5}}, gravity=[0.0, -9.81])
+        data["output"] = {"fields": sorted(capabilities.ROW_LOCAL_FIELDS)}
+        sim = ExplicitMPM(load_scene(data))
+        sim.advance(sim.stable_time_step(0.5))
+        monkeypatch.setattr(fields, "ROW_BLOCK", 7)
+        frame = fields.frame_fields(sim, data["output"]["fields"])
+        assert sim.particles.count % 7 != 0
+        for name in capabilities.ROW_LOCAL_FIELDS:
+            blocks = list(frame.blocks(name))
+            assert [start for start, _ in blocks] == list(range(0, sim.particles.count, 7))
+            assert np.array_equal(np.concatenate([values for _, values in blocks]), frame[name]), name
 
 
 class TestBackends:
