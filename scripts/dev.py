@@ -94,7 +94,7 @@ def _workers(extra: list[str]) -> list[str]:
     """pytest-xdist workers, two per core up to eight: most of a cold run is numba compiling,
     one core per kernel, and many tests wait (on a service, Slurm, a browser) while a worker
     beside them could compile; on 2 cores four workers take a cold run from 23-27 minutes to
-    16-30, as busy as the machine is (tests/conftest.py says how the tests are shared out). Serial when the command
+    16-31, as busy as the machine is (tests/conftest.py says how the tests are shared out). Serial when the command
     line chooses (`-n 0`, `-p no:xdist`) or MPM_TEST_WORKERS=0."""
     if any(arg.startswith(("-n", "--numprocesses", "--dist")) for arg in extra) or "no:xdist" in extra:
         return []
