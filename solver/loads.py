@@ -57,6 +57,14 @@ class BodyLoads:
         return acc
 
 
+def keeps_reference_position(scene) -> bool:
+    """Whether the particles keep X, their seeded position: TLMPM's reference, a body force in
+    X, Y, Z, or the `reference_position` output field (solver/stepper.py; the memory estimate
+    counts it)."""
+    return (scene.method.formulation == "tlmpm" or BodyLoads(scene).needs_reference
+            or "reference_position" in scene.output.fields)
+
+
 class AppliedLoads:
     """The scene's `loads` as a hook: point forces and tractions on particles.
 

@@ -17,7 +17,7 @@ from solver.boundary import ConditionReactions
 from solver.contact import domain_support
 from solver.energy import Energies
 from solver.errors import SolverError
-from solver.loads import AppliedLoads, BodyLoads
+from solver.loads import AppliedLoads, BodyLoads, keeps_reference_position
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED
 from solver.rigid import RigidBodies
 from solver.state import make_materials, make_particles, material_slices
@@ -41,12 +41,6 @@ class Instability(SolverError, RuntimeError):
 
     def __reduce__(self):   # sent between processes: any rank's failure stops them all
         return Instability, (self.step, self.time, self.particle_id, self.quantity, self.detail)
-
-
-def needs_reference_position(scene, loads, formulation) -> bool:
-    """Whether the particles keep X, their seeded position: TLMPM's reference, a body force
-    in X, Y, Z, or the `reference_position` output field."""
-    return loads.needs_reference or formulation.reference or "reference_position" in scene.output.fields
 
 
 class ExplicitMPM:
@@ -79,7 +73,7 @@ class ExplicitMPM:
         self.loads = BodyLoads(scene)
         self.applied_loads = AppliedLoads(scene, self.particles) if scene.loads else None   # as seeded
         self.formulation = step.FORMULATIONS[method.formulation]()
-        if needs_reference_position(scene, self.loads, self.formulation):   # TLMPM: slabs of X too
+        if keeps_reference_position(scene):   # TLMPM: slabs of X too
             self.particles.X = self.particles.x.copy()
         self.flip_ratio = float(method.flip_ratio) if method.transfer == "flip" else 0.0
         self.time = 0.0

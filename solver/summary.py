@@ -139,15 +139,15 @@ def particle_bytes(scene: Scene) -> int:
     stored stencil: the weights, weight gradients and node indices of the nodes it touches;
     a saturated soil's pore pressure, Darcy flux and three fluid constants (solver/pore_fluid.py),
     and on the fused backend the step's first positions its passes form their weights at."""
-    from solver.loads import BodyLoads
+    from solver.loads import keeps_reference_position
 
     dim = scene.dimension
     tensor = 9 if scene.axisymmetric else dim * dim
     values = 2 * dim + 2 * tensor + 9 + 4 + materials.state_values(scene)
-    if scene.method.formulation == "tlmpm":
-        values += dim + tensor
-    elif BodyLoads(scene).needs_reference or "reference_position" in scene.output.fields:
+    if keeps_reference_position(scene):
         values += dim
+    if scene.method.formulation == "tlmpm":   # its first Piola stress
+        values += tensor
     if scene.method.transfer in _AFFINE_TRANSFERS:
         values += dim * dim
     fused = cost.backend_name(scene) == "fused"
