@@ -107,10 +107,9 @@ class PoreFluid:
         if sim.stencil is not None:
             s = sim.stencil
             return _Passes(pore_kernels.pressure_to_grid, pore_kernels.darcy_to_grid, pore_kernels.squeeze_to_grid,
-                           pore_kernels.take_change, (s.idx, s.w, s.dw), (s.idx, s.dw), (s.idx, s.w), (s.idx, s.w))
-        at = (*self._at, self.start)
+                           pore_kernels.take_change, (s.idx, s.w, s.dw))
         return _Passes(pore_kernels.pressure_to_grid_at, pore_kernels.darcy_to_grid_at,
-                       pore_kernels.squeeze_to_grid_at, pore_kernels.take_change_at, at, at, at, at)
+                       pore_kernels.squeeze_to_grid_at, pore_kernels.take_change_at, (*self._at, self.start))
 
     def begin_step(self, sim, t_end: float) -> None:
         self.dt = t_end - sim.time   # (USF's P2G of the forces is told no dt)
@@ -129,7 +128,7 @@ class PoreFluid:
         passes = self._passes(sim)
         pressure = x["pore_pressure"]
         self.storage.fill(0.0)
-        passes.pressure(*passes.on_pressure, p.volume, x["pore_compliance"], pressure, self.storage,
+        passes.pressure(*passes.stencil, p.volume, x["pore_compliance"], pressure, self.storage,
                         sim.grid.force)   # (the force's ghosts: the mechanics sums them next)
         if sim.axisymmetry is not None:   # the hoop term of p's force; Darcy's and the squeeze's weak forms
             sim.axisymmetry.add_pore_pressure_force(sim, pressure)   # take the rings' volumes and L_thth as they are
@@ -142,7 +141,7 @@ class PoreFluid:
         sim.domain.share_nodes(self.grid_pressure)
         self.inflow.fill(0.0)
         # b of Darcy's law: the step's body acceleration (gravity and the body force), as the mixture's
-        passes.darcy(*passes.on_darcy, self.grid_pressure, x["pore_mobility"], x["pore_fluid_density"],
+        passes.darcy(*passes.stencil, self.grid_pressure, x["pore_mobility"], x["pore_fluid_density"],
                      sim.phases.acceleration, p.volume, x["darcy_flux"], self.inflow)
         sim.domain.sum_ghosts(self.inflow)
         np.divide(self.dt * self.inflow, self.storage[:, 0], out=self.change, where=stored)
@@ -157,7 +156,7 @@ class PoreFluid:
         self.squeeze.fill(0.0)
         # the pore pressure's work on the mixture, sum dt sum_p V_p p_p tr(L_p) (J): energy the fluid
         # gave the mechanics (its stored energy, the flow), which the runner's energy check counts as supplied
-        power = passes.squeeze(*passes.on_squeeze, p.volume, p.L, x["pore_compliance"], x["pore_pressure"], self.squeeze)
+        power = passes.squeeze(*passes.stencil, p.volume, p.L, x["pore_compliance"], x["pore_pressure"], self.squeeze)
         sim.work.add("pore_pressure_work", dt * power)
 
     def end_step(self, sim, dt: float) -> None:
@@ -171,7 +170,7 @@ class PoreFluid:
         self.change -= dt * squeeze
         sim.domain.share_nodes(self.change)   # (the owners' values: a ghost's sums were partial)
         passes, x = self._passes(sim), sim.particles.extra
-        passes.take(*passes.on_take, self.change, x["pore_compliance"], x["pore_pressure"])
+        passes.take(*passes.stencil, self.change, x["pore_compliance"], x["pore_pressure"])
 
     def undrained_speed(self, wave_speed: float) -> float:
         """The fastest wave with the fluid's stiffness added: sqrt(c^2 + (K_w / n) / rho)."""
@@ -182,15 +181,12 @@ class PoreFluid:
 
 
 class _Passes(NamedTuple):
-    """The pore kernels of one stencil source and the arguments that give each its stencil."""
+    """The pore kernels of one stencil source, and the first arguments, which give each its stencil."""
     pressure: Callable
     darcy: Callable
     squeeze: Callable
     take: Callable
-    on_pressure: tuple
-    on_darcy: tuple
-    on_squeeze: tuple
-    on_take: tuple
+    stencil: tuple
 
 
 def make(sim):

@@ -1,6 +1,7 @@
 """Numba kernels of the pore pressure (solver/pore_fluid.py): four passes a step over the
 saturated particles, serial (free of races without per-thread copies). Each comes twice:
-on the general backend's stored stencil (idx, w, dw at x_p^t: `pressure_to_grid` ...), and,
+on the general backend's stored stencil (idx, w, dw at x_p^t: each takes all three and reads
+what it needs: `pressure_to_grid` ...), and,
 for the fused backend, which stores none, with each particle's weights formed in the pass
 from x_p^t (`pressure_to_grid_at` ...: `_stencil_at`), the same bits as the stored ones for
 linear hats and quadratic B-splines. The four cost what the stored-stencil passes do (0.97x
@@ -38,7 +39,7 @@ def pressure_to_grid(idx, w, dw, volume, compliance, pressure, storage, force):
 
 
 @njit(cache=True)
-def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, acc, volume, flux, inflow):
+def darcy_to_grid(idx, w, dw, grid_pressure, mobility, fluid_density, acc, volume, flux, inflow):
     """q_p = -(k / (rho_w g_n)) (grad p - rho_w b_p) with grad p = sum_I p_I grad phi_I(x_p)
     (Darcy), and Q_I += V_p q_p . grad phi_I. acc: the step's body acceleration b, a row a
     particle or one row for all."""
@@ -61,7 +62,7 @@ def darcy_to_grid(idx, dw, grid_pressure, mobility, fluid_density, acc, volume, 
 
 
 @njit(cache=True)
-def squeeze_to_grid(idx, w, volume, L, compliance, pressure, squeeze):
+def squeeze_to_grid(idx, w, dw, volume, L, compliance, pressure, squeeze):
     """squeeze_I = sum_p phi_I V_p tr(L_p) over the saturated particles: the weak form of the
     skeleton's volume change, which the nodal pressure takes as -dt squeeze_I / S_I. Returns
     sum_p V_p p_p tr(L_p), the power of the pore pressure on the mixture."""
@@ -86,7 +87,7 @@ def _trace(L, p):
 
 
 @njit(cache=True)
-def take_change(idx, w, change, compliance, pressure):
+def take_change(idx, w, dw, change, compliance, pressure):
     """p_p += sum_I phi_I dp_I for the saturated particles (a dry one keeps its 0)."""
     for p in range(idx.shape[0]):
         if compliance[p] == 0.0:
