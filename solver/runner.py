@@ -147,9 +147,10 @@ def run(
 
 
 def _run(scene, out_dir, started, compiling, progress, should_stop, resume, checkpoint_seconds) -> Result:
-    # (the loop holds the simulation alone, so that `release` lets its arrays go before the previews)
-    loop = _TimeLoop(scene, make_simulation(scene), started, progress, should_stop)
-    compiling.start_helper(loop.sim.threads)
+    sim = make_simulation(scene)
+    compiling.start_helper(sim.threads)   # (before the loop's set-up, which compiles kernels too)
+    loop = _TimeLoop(scene, sim, started, progress, should_stop)
+    del sim   # the loop holds it alone, so that `release` lets its arrays go before the previews
     loop.compiling = compiling
     restart = checkpoint.resume(loop.sim, out_dir) if resume else None
     if restart is not None:
