@@ -64,11 +64,17 @@ def main() -> int:
     variants += [(f"defaults, cfl {cfl}", None, cfl, {}) for cfl in (0.5, 0.2, 0.1, 0.025)]
     variants += [(f"defaults but linear hats named, cfl {cfl}", None, cfl, {"shape_function": "linear"})
                  for cfl in (0.5, 0.2, 0.05)]
+    # the particles' own volumes J V0 instead of the grid's density (solver/gas_density.py)
+    own = {"density_from_grid": False}
+    variants += [(f"defaults but linear hats named, own volumes, cfl {cfl}", None, cfl, {"shape_function": "linear"},
+                  own) for cfl in (0.5, 0.2, 0.05)]
+    variants += [("defaults, own volumes, cfl 0.5", None, 0.5, {}, own)]
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for label, av, cfl, method in variants:
+        for label, av, cfl, method, *gas in variants:
             scene = defaults_scene(cfl, method) if av is None else sod_scene(av)
+            scene["materials"]["air"].update(*gas)
             scene["time"]["cfl"] = cfl
             scene["method"].update(method)
             scene["output"]["fields"].append("pressure_smoothed")

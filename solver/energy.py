@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from solver.materials import plastic_work
+from solver.materials.ideal_gas import grid_density
 from solver.pore_fluid_schema import saturated
 
 STORED, DISSIPATED, WORK = "stored", "dissipated", "work"
@@ -65,6 +66,8 @@ TERMS: list[Term] = [
     # negative while the skeleton compresses, the share of the loads' work the pore water takes
     # (stored in it while undrained, dissipated by Darcy flow as it drains)
     Term("pore_pressure_work", WORK, _ledger("pore_pressure_work"), saturated),
+    # the internal energy a gas's density from the grid moved along the adiabat (solver/gas_density.py)
+    Term("gas_density_work", WORK, _ledger("gas_density_work"), grid_density),
 ]
 
 

@@ -1014,6 +1014,8 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
         problems.append(("damping", f"is not supported yet with several processes "
                                     f"(parallel.processes = {scene.parallel.processes})"))
 
+    for name, material in scene.materials.items():
+        problems += material.scene_problems(f"materials.{name}", scene)
     problems += _frame_problems(scene)
     problems += _condition_problems(scene, length_ok)
     problems += thermal_problems(scene, THERMAL_CONDITIONS, length_ok)

@@ -113,6 +113,11 @@ class BaseMaterial(SceneModel):
         """What a body made of this material lacks (path: the body's, "bodies[i]")."""
         return []
 
+    def scene_problems(self, path: str, scene: Any) -> list[tuple[str, str]]:
+        """What the rest of the scene lacks for this material's own options (path: the
+        material's, "materials.<name>")."""
+        return []
+
     def temperature_problems(self, path: str, body: Any) -> list[tuple[str, str]]:
         """What this material lacks for a body of it to start at the body's initial_temperature
         (checked after the body's state keys)."""

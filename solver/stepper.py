@@ -148,6 +148,10 @@ class ExplicitMPM:
         self.affine = affine_transfer(self.scene, self.particles, self.grid)
         self.hooks = step.scene_hooks(self)
 
+    def material_model(self, name: str):
+        """The model of scene material `name` (made once; None for a material no body is made of)."""
+        return self._model_of.get(name)
+
     def _place_particles(self) -> None:
         """Per-particle work arrays (the backend's) and material slices for the particles held here."""
         self.phases.place_particles()

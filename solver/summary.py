@@ -16,6 +16,7 @@ from pydantic import BaseModel, Field
 
 from solver import capabilities, cost, materials, stability
 from solver import shape as shape_functions
+from solver.materials.ideal_gas import grid_density
 from solver.pore_fluid_schema import saturated
 from solver.scene import Scene
 from solver.schema import count_up
@@ -138,7 +139,8 @@ def particle_bytes(scene: Scene) -> int:
     backend's v_pic of MUSL's remap (allocated for any scheme), or the general backend's
     stored stencil: the weights, weight gradients and node indices of the nodes it touches;
     a saturated soil's pore pressure, Darcy flux and three fluid constants (solver/pore_fluid.py),
-    and on the fused backend the step's first positions its passes form their weights at."""
+    and on the fused backend the step's first positions its passes form their weights at; the
+    stencil of a gas that takes its density from the grid (solver/gas_density.py), on either backend."""
     from solver.loads import keeps_reference_position
 
     dim = scene.dimension
@@ -153,11 +155,11 @@ def particle_bytes(scene: Scene) -> int:
     fused = cost.backend_name(scene) == "fused"
     if saturated(scene):
         values += 4 + dim + (dim if fused else 0)
+    touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
     if fused:
         values += dim
-    else:
-        touched = shape_functions.REGISTRY[scene.method.shape_function].support ** dim
-        values += touched * (1 + dim) + touched
+    stencil = touched * (1 + dim) + touched
+    values += stencil * ((not fused) + grid_density(scene))   # the stored one; a gas's own (solver/gas_density.py)
     return 8 * values + 4
 
 
@@ -166,9 +168,11 @@ def node_bytes(scene: Scene, threads: int) -> int:
     (solver/state.py Grid), the copies of mass, momentum and force each thread beyond the
     first adds into (solver/threads.py ScatterCopies), the domain's 1-byte mask of active
     nodes; with contact "friction" each body's field and its presence and normal (1 + dim); a
-    saturated soil's six nodal values (solver/pore_fluid.py PoreFluid.place)."""
+    saturated soil's six nodal values (solver/pore_fluid.py PoreFluid.place); a gas's nodal mass and
+    volume where it takes its density from the grid (solver/gas_density.py)."""
     dim = scene.dimension
-    per_field = 8 * (1 + 4 * dim) + 8 * (threads - 1) * (1 + 2 * dim) + (8 * 6 if saturated(scene) else 0)
+    per_field = 8 * (1 + 4 * dim) + 8 * (threads - 1) * (1 + 2 * dim) + (8 * 6 if saturated(scene) else 0) \
+        + (8 * 2 if grid_density(scene) else 0)
     return scene.grid_fields() * (per_field + (8 * (1 + dim) if scene.contact.fields else 0)) + 1
 
 

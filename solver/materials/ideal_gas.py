@@ -27,10 +27,13 @@ class IdealGas(BaseMaterial):
     model: Literal["ideal_gas"]
     gamma: Annotated[float, Strict(), Field(gt=1)] = 1.4
     artificial_viscosity: ArtificialViscosity = Field(default_factory=ArtificialViscosity)
+    # After each stress update the particles take the grid's density (solver/gas_density.py):
+    # their volumes J V0 drift from the room they take where a gas thins to about a particle a
+    # cell. None: wherever the scene allows it (solver.gas_density.gas_density_refusal).
+    density_from_grid: Annotated[bool, Strict()] | None = None
     # A gas expands to about one particle per cell (Sod's left plateau: 1.3 of the 3 it started
-    # with), too few for the linear hats' quadrature: the plateau came 54 % low at cfl 0.5 and
-    # the L1 density error 0.039 (0.021 at cfl 0.2). The C1 cubic splines keep the volumes with
-    # the particles: 0.0044 at cfl 0.5 (docs/benchmarks.md "Sod", issue 51).
+    # with), where the C1 cubic splines are the most accurate: L1 density error 0.0034 at cfl 0.5
+    # against linear hats' 0.012 (with the density from the grid; docs/benchmarks.md "Sod").
     method_defaults: ClassVar[dict[str, Any]] = {"shape_function": "cubic_bspline"}
     body_state_keys: ClassVar[tuple[str, ...]] = ("initial_density", "initial_pressure")
 
@@ -40,6 +43,36 @@ class IdealGas(BaseMaterial):
 
     def initial_wave_speed(self, body) -> float:
         return self.sound_speed(body.initial_density, body.initial_pressure)
+
+    def scene_problems(self, path: str, scene) -> list[tuple[str, str]]:
+        refusal = grid_density_refusal(scene) if self.density_from_grid else None
+        return [(f"{path}.density_from_grid", f"true {refusal}")] if refusal else []
+
+
+def grid_density_refusal(scene) -> str | None:
+    """Why the scene's gases cannot take their density from the grid (solver/gas_density.py), or None."""
+    from solver import shape
+
+    method = scene.method
+    if shape.REGISTRY[method.shape_function].per_particle_data:
+        return (f"the nodes' volumes need weights of the position alone, not {method.shape_function!r}'s "
+                "particle domains")
+    if method.formulation != "ulmpm":
+        return "needs formulation 'ulmpm' (TLMPM's grid is the reference configuration)"
+    if scene.axisymmetric:
+        return "is not available in axisymmetric scenes (the nodes' volumes are rings)"
+    return None
+
+
+def takes_grid_density(scene, material) -> bool:
+    """Whether a material is a gas that takes its density from the grid: as it says, else where it can."""
+    wanted = getattr(material, "density_from_grid", False)
+    return bool(wanted) if wanted is not None else grid_density_refusal(scene) is None
+
+
+def grid_density(scene) -> bool:
+    """Whether a scene has a gas that takes its density from the grid (its energy term)."""
+    return any(takes_grid_density(scene, material) for material in scene.materials.values())
 
 
 def body_state(scene, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -11,7 +11,7 @@ R4 = ShapeFunction(
         # particle's own, the widest stencil with several processes (the slabs' halo); on
         # one process the stencil widens past it to what the largest domain needs
         # (solver/shape/kernels/cpdi.py: support_needed).
-        name="cpdi_r4", support=4, kernels="solver.shape.kernels.cpdi", least_cells=3,
+        name="cpdi_r4", support=4, kernels="solver.shape.kernels.cpdi", least_cells=3, per_particle_data=True,
         # a domain within two cells per axis (most: h / particles_per_cell stretched less
         # than 2x) touches 3 nodes per axis: the compact stencil, 27 nodes in 3D against 64
         compact_support=3,

@@ -4,7 +4,8 @@ from dataclasses import replace
 
 from solver.shape.registry import ShapeFunction
 
-GIMP = ShapeFunction(name="gimp", support=3, kernels="solver.shape.kernels.gimp", least_cells=2)
+GIMP = ShapeFunction(name="gimp", support=3, kernels="solver.shape.kernels.gimp", least_cells=2,
+                     per_particle_data=True)
 # cpGIMP is GIMP with boxes that follow the stretch: the same kernel, another evaluate.
 CPGIMP = replace(GIMP, name="cpgimp", evaluate="evaluate_contiguous")
 

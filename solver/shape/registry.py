@@ -36,3 +36,6 @@ class ShapeFunction:
     # particles (CPDI: 3, a domain within two cells per axis); the first particle that needs
     # more widens the stencil for the rest of the run (solver/step/general.py). 0: none.
     compact_support: int = 0
+    # Its weights depend on a particle's own data (GIMP's sizes, CPDI's domains), not on the
+    # position alone: no integral of N_I over the grid (a gas's density from the grid) is defined.
+    per_particle_data: bool = False

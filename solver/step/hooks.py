@@ -28,7 +28,8 @@ boundaries (before_update, their work at after_g2p: solver/absorbing.py), `dampi
 after_forces, before_update, after_g2p: solver/thermal.py), thermal expansion (after_stress),
 the pore fluid of a saturated soil (begin_step, after_forces, after_stress, end_step: solver/pore_fluid.py),
 F-bar (after_kinematics, after_stress: solver/fbar.py), a shape function's own (the tracked
-corners of cpdi_q4 and cpdi_tet4, after_g2p).
+corners of cpdi_q4 and cpdi_tet4, after_g2p), a gas's density from the grid (begin_step:
+solver/gas_density.py).
 
 A hook that needs the stored stencil (the hoop terms) runs with the general kernels
 only: the fused backend's `supports(scene)` refuses such scenes. Conduction's particle passes
@@ -42,7 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import contact, kernels, pore_fluid
+from solver import contact, gas_density, kernels, pore_fluid
 from solver.absorbing import AbsorbingFaces
 from solver.damping import Damping
 from solver.thermal import make_conduction, make_expansion
@@ -192,7 +193,8 @@ def _damping(sim):
 # volume after the hoop terms changed it and puts the particles' own F, L and V back after
 # every other stress hook.
 HOOKS = [_rigid_bodies, _field_contact, _grid_conditions, _hoop_terms, _external_work, _applied_loads, _tools,
-         _absorbing_faces, _damping, make_conduction, make_expansion, pore_fluid.make, _fbar, _shape_hook]
+         _absorbing_faces, _damping, make_conduction, make_expansion, pore_fluid.make, _fbar, _shape_hook,
+         gas_density.make]
 
 
 def scene_hooks(sim) -> Hooks:

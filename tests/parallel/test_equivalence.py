@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ranks import (AXISYMMETRIC, HEAT_2D, PORE_2D, RIGID_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference,
+from ranks import (AXISYMMETRIC, GAS_2D, HEAT_2D, PORE_2D, RIGID_2D, SCENE_2D, SCENE_3D, TLMPM_2D, last_frame, relative_difference,
                    run_cli, run_mpiexec, scene)
 
 from solver.results import read_series
@@ -72,6 +72,8 @@ CASES = {
     "tools": scene(SCENE_2D, tools=[{"name": "roller", "geometry": {"type": "sphere", "center": [0.5, 0.5],
                                                                     "radius": 0.16},
                                      "velocity": [0.0, -0.5], "stiffness": 2.0, "friction": 0.3}]),
+    # a gas that takes its density from the grid (solver/gas_density.py): nodal masses across the cuts
+    "gas": scene(GAS_2D),
     "tools-tlmpm": scene(TLMPM_2D, tools=[{"name": "cutter", "geometry": {"type": "polygon", "vertices": [
         [0.42, 0.19], [0.5, 0.19], [0.5, 0.3]]}, "velocity": ["0.5 * t", -0.2], "stiffness": 1.0, "friction": 0.1}]),
 }
@@ -80,7 +82,7 @@ RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl"
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2), ("contact-density", 2), ("contact-density", 3),
         ("heat-contact", 2), ("heat-contact", 3), ("heat-tlmpm", 2), ("tools", 2), ("tools-tlmpm", 2),
-        ("pore", 2), ("pore", 3), ("pore-axisymmetric", 2)]
+        ("pore", 2), ("pore", 3), ("pore-axisymmetric", 2), ("gas", 2), ("gas", 3)]
 
 
 @pytest.fixture(scope="module", autouse=True)
