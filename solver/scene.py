@@ -792,6 +792,9 @@ class Parallel(SceneModel):
     processes: Annotated[int, Strict(), Field(ge=1)] = 1  # a request; the service may cap it
     # slabs are balanced by particle counts at the start and every N steps; 0: even slabs, never moved
     rebalance_every: Annotated[int, Strict(), Field(ge=0)] = 100
+    # what the rebalancing evens out: each slab's particles, or its measured work (the time each
+    # process spent stepping, off its waits, shared out over its particles: solver/parallel/mpi.py)
+    balance: Literal["particles", "work"] = "particles"
     # threads per process (solver/threads.py); 0: the cores this machine gives the run, shared among its processes
     threads: Annotated[int, Strict(), Field(ge=0, le=1024)] = 0
 
@@ -801,6 +804,13 @@ class Parallel(SceneModel):
         if value > capabilities.MAX_PROCESSES:
             raise scene_error(f"{value} processes is not supported yet (at most {capabilities.MAX_PROCESSES})")
         return value
+
+    @model_validator(mode="after")
+    def _work_is_measured_between_rebalances(self) -> "Parallel":
+        if self.balance == "work" and self.rebalance_every == 0:
+            raise problems_at([("balance", "'work' needs rebalance_every > 0: the work is measured between "
+                                           "rebalancings, and 0 never moves the slabs")])
+        return self
 
 
 # --------------------------------------------------------------------------- the scene

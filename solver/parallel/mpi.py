@@ -12,7 +12,10 @@ In a step:
     migrate      after G2P, particles that crossed into another slab move to
                  its process with every per-particle array (Particles.arrays());
                  every `rebalance_every` steps the cuts move so that each slab
-                 holds about the same number of particles (MPM3DMP 4.3).
+                 holds about the same number of particles (MPM3DMP 4.3), or, with
+                 `balance: "work"`, the same work: each process's time since the
+                 last rebalancing, less what it spent communicating and waiting
+                 for the others, shared out evenly over the particles it held.
 
 Total-Lagrangian scenes (formulation tlmpm) own particles by their reference
 position X: the grid is the reference configuration and X never changes, so
@@ -23,6 +26,8 @@ are collective, so every process takes the same branch at the same step.
 """
 from __future__ import annotations
 
+import functools
+from time import perf_counter
 from types import SimpleNamespace
 
 import numpy as np
@@ -39,6 +44,19 @@ from solver.state import Grid, grid_geometry, material_of_body
 HALO_TAG = 17
 
 
+def _waits(method):
+    """The time in `method` is communication and waiting for the other processes, not this
+    process's work (balance "work" leaves it out)."""
+    @functools.wraps(method)
+    def timed(self, *args, **kwargs):
+        start = perf_counter()
+        try:
+            return method(self, *args, **kwargs)
+        finally:
+            self._waited += perf_counter() - start
+    return timed
+
+
 class SlabDomain:
     def __init__(self, comm: MPI.Comm, scene, support: int):
         self.comm = comm
@@ -53,6 +71,9 @@ class SlabDomain:
         self._inv_h = 1.0 / self.h   # as Grid computes it
         self._whole_strides = _strides(self.cells + 1)
         self.rebalance_every = scene.parallel.rebalance_every
+        self._by_work = scene.parallel.balance == "work"
+        self._since: float | None = None   # when this process's work began to be measured
+        self._waited = 0.0                  # time spent communicating since then
         self._by_reference = scene.method.formulation == "tlmpm"   # slabs of the reference configuration
         self.cuts = even_cuts(int(self.cells[self.axis]), self.processes)
         self._material = material_of_body(scene)
@@ -137,25 +158,59 @@ class SlabDomain:
         moved = UNCHANGED
         if self._by_reference:   # X never changes: nor do the owners
             return moved
+        if self._since is None:   # from the end of the first step, which compiled the kernels
+            self._since, self._waited = perf_counter(), 0.0
         if self.rebalance_every > 0 and step % self.rebalance_every == 0:
-            cuts = balanced_cuts(self._layer_counts(particles, local=True), self.processes)
+            cuts = self._rebalanced_cuts(particles)
             if not np.array_equal(cuts, self.cuts):
                 self.cuts = cuts
                 self._plan()
                 moved = SLABS_MOVED
         dest = np.empty(particles.count, dtype=np.int64)
         leaving = self._owners(particles, dest)
-        if self.comm.allreduce(leaving) == 0:
+        if self._total(leaving) == 0:
             return moved
         _, counts, order, start = bin_particles(dest, self.processes, 1)
         arrays = particles.arrays()
         # (np.take, not a[index]: numpy's fancy indexing copies (n, 3, 3) rows 4-5x slower)
         outgoing = [{name: np.take(a, order[start[r]:start[r + 1]], axis=0) for name, a in arrays.items()}
                     if r != self.rank and counts[r] else None for r in range(self.processes)]
-        incoming = [part for part in self.comm.alltoall(outgoing) if part]
+        incoming = [part for part in self._all_to_all(outgoing) if part]
         stay = order[start[self.rank]:start[self.rank + 1]]
         particles.replace(_merged(arrays, stay, incoming, self._material), rearranged=True)
         return max(moved, PARTICLES_MOVED)
+
+    def _rebalanced_cuts(self, particles) -> np.ndarray:
+        """Cuts that even out the particles per slab, or (balance "work") their measured work:
+        each layer weighs its particles times the time per particle of the process holding it."""
+        if not self._by_work:
+            return balanced_cuts(self._layer_counts(particles, local=True), self.processes)
+        now = perf_counter()
+        busy = max(now - self._since - self._waited, 0.0)
+        load = self._layer_counts(particles, local=False) * (busy / max(particles.count, 1))
+        whole = self._summed_on_root(load)
+        cuts = balanced_cuts(whole, self.processes) if self.is_root else np.empty(self.processes + 1, np.int64)
+        self._broadcast(cuts)   # (rank 0's: a floating sum may round differently on each process)
+        self._since, self._waited = perf_counter(), 0.0
+        return cuts
+
+    @_waits
+    def _total(self, count: int) -> int:
+        return int(self.comm.allreduce(count))
+
+    @_waits
+    def _all_to_all(self, outgoing: list) -> list:
+        return self.comm.alltoall(outgoing)
+
+    @_waits
+    def _summed_on_root(self, values: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(values)
+        self.comm.Reduce(values, out, op=MPI.SUM, root=0)
+        return out
+
+    @_waits
+    def _broadcast(self, values: np.ndarray) -> None:
+        self.comm.Bcast(values, root=0)
 
     def _positions(self, particles) -> np.ndarray:
         """The positions that decide a particle's slab: X in TLMPM, x otherwise."""
@@ -212,6 +267,7 @@ class SlabDomain:
         """Copy the owners' nodal values onto the ghost nodes of the other processes."""
         self._exchange(self._lent, self._ghosts, node_arrays, lambda held, got, out: np.copyto(out, got))
 
+    @_waits
     def _exchange(self, send, receive, node_arrays, combine) -> None:
         """Send the layers of `send` to their peers; combine what comes for `receive` into
         the local values, peer by peer in rank order (so sums are the same every run)."""
@@ -235,6 +291,7 @@ class SlabDomain:
         if self._failure is None:
             self._failure = error
 
+    @_waits
     def stop_if_failed(self) -> None:
         """Raise, on every process, the failure of the lowest rank that had one."""
         if self.comm.allreduce(self._failure is not None, op=MPI.LOR):
@@ -250,21 +307,26 @@ class SlabDomain:
     def min(self, value):
         return self._reduce(value, MPI.MIN)
 
+    @_waits
     def _reduce(self, value, op):
         a = np.array(value, dtype=np.float64)
         self.comm.Allreduce(MPI.IN_PLACE, a, op=op)
         return a if a.ndim else float(a)
 
+    @_waits
     def any(self, flag: bool) -> bool:
         return bool(self.comm.allreduce(bool(flag), op=MPI.LOR))
 
+    @_waits
     def barrier(self) -> None:
         self.comm.Barrier()
 
+    @_waits
     def allgather(self, array: np.ndarray) -> np.ndarray:
         """The arrays of every process, concatenated in rank order, on every process."""
         return np.concatenate(self.comm.allgather(array))
 
+    @_waits
     def root_says(self, flag: bool) -> bool:
         """Rank 0's answer on every process (for decisions taken on its clock)."""
         return bool(self.comm.bcast(bool(flag), root=0))

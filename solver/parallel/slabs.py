@@ -32,10 +32,10 @@ def even_cuts(n_cells: int, k: int) -> np.ndarray:
 
 
 def balanced_cuts(per_layer: np.ndarray, k: int) -> np.ndarray:
-    """Cuts giving each slab about the same number of particles, each at least one layer wide.
+    """Cuts giving each slab about the same load, each at least one layer wide.
 
-    per_layer[i] is the number of particles in cell layer i. Cut r goes to the
-    layer boundary where the running count is closest to r/K of the total.
+    per_layer[i] is the load of cell layer i (its particles, or their measured work). Cut r
+    goes to the layer boundary where the running load is closest to r/K of the total.
     """
     n_cells = per_layer.size
     if per_layer.sum() == 0:
@@ -73,10 +73,15 @@ def layers_of(x_axis: np.ndarray, lower: float, h: float, n_cells: int) -> np.nd
 
 
 def scene_problems(scene) -> list[tuple[str, str]]:
-    """Validation: every process needs at least one cell layer to own."""
+    """Validation: every process needs at least one cell layer to own; the work is balanced
+    only where slabs move (ULMPM)."""
     k = scene.parallel.processes
     cells = scene.grid_shape()
+    problems = []
     if k > 1 and k > max(cells):
-        return [("parallel.processes", f"{k} processes need at least {k} cells along the longest grid axis "
-                                       f"(the grid has {max(cells)})")]
-    return []
+        problems.append(("parallel.processes", f"{k} processes need at least {k} cells along the longest grid "
+                                               f"axis (the grid has {max(cells)})"))
+    if scene.parallel.balance == "work" and scene.method.formulation == "tlmpm":
+        problems.append(("parallel.balance", "'work' needs formulation 'ulmpm': TLMPM's slabs of the reference "
+                                             "configuration are balanced once, at the start"))
+    return problems

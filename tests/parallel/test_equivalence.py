@@ -35,6 +35,8 @@ CASES = {
     "2d-musl": scene(SCENE_2D),
     "2d-usl": scene(SCENE_2D, method__scheme="usl", method__transfer="pic"),
     "2d-usf": scene(SCENE_2D, method__scheme="usf"),
+    # slabs balanced by measured work: cuts that depend on the processes' clocks, the same particles
+    "2d-work": scene(SCENE_2D, parallel__balance="work"),
     "3d-musl": scene(SCENE_3D),
     "rigid": scene(RIGID_2D),
     "axisymmetric": scene(AXISYMMETRIC),
@@ -77,7 +79,7 @@ CASES = {
     "tools-tlmpm": scene(TLMPM_2D, tools=[{"name": "cutter", "geometry": {"type": "polygon", "vertices": [
         [0.42, 0.19], [0.5, 0.19], [0.5, 0.3]]}, "velocity": ["0.5 * t", -0.2], "stiffness": 1.0, "friction": 0.1}]),
 }
-RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("3d-musl", 2), ("3d-musl", 3),
+RUNS = [("2d-musl", 2), ("2d-musl", 3), ("2d-usl", 2), ("2d-usf", 3), ("2d-work", 2), ("3d-musl", 2), ("3d-musl", 3),
         ("rigid", 2), ("rigid", 3), ("axisymmetric", 2), ("axisymmetric-tlmpm", 2), ("tlmpm", 2), ("tlmpm", 3),
         ("fbar", 2), ("fbar-tlmpm", 3), ("cpdi", 3), ("cpdi-q4", 2), ("cpdi-tet4", 2),
         ("heat", 2), ("heat", 3), ("contact", 2), ("contact", 3), ("contact-rigid", 2), ("contact-density", 2), ("contact-density", 3),
