@@ -92,16 +92,24 @@ def main() -> int:
 
 
 def plot(rows: dict) -> None:
-    figure = Figure(figsize=(13.0, 7.5), dpi=90)
+    """Without and with the artificial viscosity (cubic B-splines), then linear hats with the
+    particles' own volumes and with the density from the grid."""
+    figure = Figure(figsize=(13.0, 10.5), dpi=90)
     FigureCanvasAgg(figure)
     xs = np.linspace(0, 1, 2001)
     with_av, without = rows["with viscosity, cfl 0.5"], rows["without viscosity, cfl 0.5"]
+    own, grid = rows["defaults but linear hats named, own volumes, cfl 0.5"], rows["defaults but linear hats named, cfl 0.5"]
     exact = EXACT.sample(xs, with_av["t"], X0)
     names = ("density", "velocity", "pressure")
+    panels = (((without, "particles", None), "cubic B-splines, without artificial viscosity"),
+              ((with_av, "particles", None), "cubic B-splines, with artificial viscosity"),
+              ((own, "own volumes J V0", grid), "linear hats: own volumes, density from the grid"))
     for column, (name, key, reference) in enumerate(zip(names, ("rho", "u", "p"), exact)):
-        for row, (r, title) in enumerate(((without, "without artificial viscosity"), (with_av, "with artificial viscosity"))):
-            ax = figure.add_subplot(2, 3, 3 * row + column + 1)
-            ax.plot(r["x"], r[key], ".", ms=2, label="particles")
+        for row, ((r, label, other), title) in enumerate(panels):
+            ax = figure.add_subplot(3, 3, 3 * row + column + 1)
+            ax.plot(r["x"], r[key], ".", ms=2, label=label)
+            if other is not None:
+                ax.plot(other["x"], other[key], ".", ms=2, label="density from the grid")
             if key == "p" and row == 1:
                 ax.plot(r["x"], r["smooth"], "-", lw=0.8, label="through the grid")
             ax.plot(xs, reference, "k-", lw=0.8, label="exact")
@@ -109,8 +117,8 @@ def plot(rows: dict) -> None:
             ax.grid(alpha=0.3)
             if column == 2:
                 ax.legend(fontsize=7)
-    figure.suptitle(f"Sod's shock tube at t = {with_av['t']:.3g}: 400 cells, 3 particles per cell, cubic B-splines, "
-                    "MUSL, FLIP, cfl 0.5")
+    figure.suptitle(f"Sod's shock tube at t = {with_av['t']:.3g}: 400 cells, 3 particles per cell, MUSL, FLIP, "
+                    "cfl 0.5")
     figure.tight_layout()
     IMAGES.mkdir(parents=True, exist_ok=True)
     figure.savefig(IMAGES / "sod.png", dpi=90)
