@@ -155,7 +155,7 @@ def take_grid_density(idx, w, density, gamma, mass, volume, F, energy, stress):
         volume[p] = mass[p] / rho
         for a in range(3):
             stress[p, a, a] -= change
-        scale = ratio ** (1.0 / dim)
+        scale = ratio if dim == 1 else (math.sqrt(ratio) if dim == 2 else np.cbrt(ratio))   # ratio^(1/dim)
         for a in range(dim):
             for b in range(dim):
                 F[p, a, b] *= scale
