@@ -79,6 +79,9 @@ class Restart:
     boundary_heat: float = 0.0   # heat in through heat_flux and convection faces (solver/thermal.py)
     tools: dict[str, np.ndarray] | None = None   # where the tools are (solver/tools.py's state())
     derived: tuple[str, ...] = ()   # the particle arrays that were a function of the state (Particles.derived)
+    # each material's wave speed, its largest over the processes: the next time step's, where it
+    # follows the state (a gas's sound speed, an EOS, Cam-Clay's p'), not the one it started with
+    wave_speeds: dict[str, float] | None = None
 
 
 def checkpoint_path(out_dir: str | os.PathLike) -> Path:
@@ -126,6 +129,7 @@ class Checkpointer:
         heat = sim.thermal_series()   # (collective: every process sums its boundary heat)
         work = sim.work.totals(sim.domain)   # (collective too: each process holds its share)
         tools = sim.tools.state() if sim.tools is not None else None   # (collective too)
+        speeds = _wave_speeds(sim)   # (collective too)
         self.last_step, self.last_time = sim.step_count, time.monotonic()
         if particles is None:
             return
@@ -136,7 +140,7 @@ class Checkpointer:
                                 step=sim.step_count, time=sim.time, dt=dt, frame_next=frame_next,
                                 frames_written=frames_written, **work,
                                 **({"boundary_heat": heat["boundary_heat"]} if heat else {}),
-                                derived=",".join(sim.particles.derived_names))
+                                derived=",".join(sim.particles.derived_names), wave_speeds=json.dumps(speeds))
                 for name, values in (tools or {}).items():
                     h5.create_dataset(f"tools/{name}", data=values)
                 for name, array in particles.items():
@@ -196,7 +200,8 @@ def load(out_dir: Path, scene) -> Restart | None:
                       frame_next=int(attrs["frame_next"]), frames_written=int(attrs["frames_written"]),
                       work=_work_totals(attrs, scene), particles=particles, series=series,
                       boundary_heat=float(attrs.get("boundary_heat", 0.0)), tools=tools,
-                      derived=tuple(name for name in str(attrs.get("derived", "")).split(",") if name))
+                      derived=tuple(name for name in str(attrs.get("derived", "")).split(",") if name),
+                      wave_speeds=json.loads(str(attrs.get("wave_speeds", "null"))))
     source = _result_to_continue(Path(out_dir))
     try:
         complete = len(list_frames(source)) if source else 0
@@ -255,6 +260,18 @@ def _restore(sim, restart: Restart) -> None:
         sim.tools.restore(restart.tools, sim.domain.is_root)
     if sim.conduction is not None:   # the total, kept by one process (the series sums them)
         sim.conduction.boundary_heat = restart.boundary_heat if sim.domain.is_root else 0.0
+    for name, speed in (restart.wave_speeds or {}).items():
+        model = sim.material_model(name)
+        if model is not None:
+            model.wave_speed = speed
+
+
+def _wave_speeds(sim) -> dict[str, float]:
+    """Each material's wave speed now, its largest over the processes (a stress update put
+    off runs first: ExplicitMPM.wave_speed)."""
+    sim.wave_speed
+    return {name: sim.domain.max(model.wave_speed) for name in sim.scene.materials
+            if (model := sim.material_model(name)) is not None}
 
 
 def _set_aside_result(out_dir: Path) -> None:

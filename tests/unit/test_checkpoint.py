@@ -261,3 +261,24 @@ def test_a_run_on_a_frictional_floor_resumes_to_the_same_friction_work(tmp_path,
     scene["boundary_conditions"] = [{"type": "wall", "face": "y-", "mode": "friction", "friction": 0.3}]
     reference = assert_resumes_alike(scene, tmp_path, monkeypatch)
     assert read_series(reference.result_path)["friction_work"][-1] < 0   # the floor took energy out
+
+
+def test_a_gas_run_resumes_to_the_same_result(tmp_path, monkeypatch):
+    """A gas that takes its density from the grid (solver/gas_density.py): the energy it moved
+    (gas_density_work) is carried, and the first resumed step takes the grid's density from
+    the checkpoint's positions as the uninterrupted run did. Its sound speed, which sets the
+    next time step, is carried too: a resumed run took the gas's initial one and ran 102 steps
+    where the uninterrupted run took 103 (every material whose wave speed follows its state)."""
+    tube = {"version": 1, "name": "tube", "dimension": 1, "method": {"shape_function": "linear"},
+            "grid": {"lower": [0.0], "upper": [1.0], "cell_size": 0.01},
+            "materials": {"air": {"model": "ideal_gas"}},
+            "bodies": [{"name": "left", "material": "air", "particles_per_cell": 3, "initial_density": 1.0,
+                        "initial_pressure": 1.0, "geometry": {"type": "box", "lower": [0.0], "upper": [0.5]}},
+                       {"name": "right", "material": "air", "particles_per_cell": 3, "initial_density": 0.125,
+                        "initial_pressure": 0.1, "geometry": {"type": "box", "lower": [0.5], "upper": [1.0]}}],
+            "boundary_conditions": [{"type": "wall", "face": "x-", "mode": "slip"},
+                                    {"type": "wall", "face": "x+", "mode": "slip"}],
+            "time": {"end": 0.2, "cfl": 0.5},
+            "output": {"frames": 5, "fields": ["position", "velocity", "density", "pressure"], "energies": True}}
+    reference = assert_resumes_alike(tube, tmp_path, monkeypatch)
+    assert read_series(reference.result_path)["gas_density_work"][-1] != 0
