@@ -4,7 +4,8 @@
 
 Runs the axisymmetric Taylor bar of tests/verification/taylor_bar.py at cells of
 0.4 and 0.2 mm (2 x 2 particles per cell) with linear hat functions and with
-cubic B-splines, in axisymmetric TLMPM (linear, one particle per cell) at 0.4 and
+cubic B-splines, with linear hats and no rate term (C = 0, the review authors' own
+input) at 0.4, 0.2 and 0.1 mm, in axisymmetric TLMPM (linear, one particle per cell) at 0.4 and
 0.2 mm, and with --3d the 3D quarter bar at 0.8 and 0.3 mm (2 x 2 x 2, ULMPM)
 and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: linear, one particle
 per cell) at cells of 0.508 and 0.254 mm, and prints the "Taylor bar" table of docs/benchmarks.md:
@@ -37,6 +38,13 @@ def ulmpm(dim: int, cell: float, ppc: int, shape: str) -> tuple[str, dict, float
     return f"ULMPM {label}, {shape}, cell {cell * 1e3:g} mm, {ppc}^{dim} ppc", scene, cell / ppc
 
 
+def without_rate_term(cell: float) -> tuple[str, dict, float]:
+    """The review authors' own input (data/karamelo's Taylor bar: `C = 0#0.013`): no rate term."""
+    label, scene, spacing = ulmpm(2, cell, 2, "linear")
+    scene["materials"]["copper"] = {**scene["materials"]["copper"], "C": 0.0}
+    return f"{label}, C = 0", scene, spacing
+
+
 def tlmpm_axisymmetric(cell: float) -> tuple[str, dict, float]:
     return f"TLMPM axisymmetric, linear, cell {cell * 1e3:g} mm, 1 ppc", \
         taylor_scene(cell, 1, 2, frames=2, formulation="tlmpm"), cell
@@ -55,6 +63,7 @@ def tlmpm_3d(cell: float) -> tuple[str, dict, float]:
 
 def main() -> int:
     runs = [ulmpm(2, cell, 2, shape) for shape in ("linear", "cubic_bspline") for cell in (0.4e-3, 0.2e-3)]
+    runs += [without_rate_term(cell) for cell in (0.4e-3, 0.2e-3, 0.1e-3)]
     runs += [tlmpm_axisymmetric(0.4e-3), tlmpm_axisymmetric(0.2e-3)]
     if "--3d" in sys.argv:
         runs += [ulmpm(3, 0.8e-3, 2, "linear"), ulmpm(3, 0.3e-3, 2, "linear"),
