@@ -307,6 +307,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     rows = [
         ("particles", f"{summary.particles:,}  ({bodies})"),
         ("method", _method_line(scene.method)),
+        *_gas_density_rows(scene),
         ("grid nodes", f"{summary.grid_nodes:,}  ({' x '.join(map(str, summary.grid_shape))} cells)"),
         ("time step", f"{summary.dt:.6g}" + ("" if scene.time.dt else "  (adaptive, estimated)")),
         ("estimated steps", f"{summary.estimated_steps:,}"),
@@ -319,6 +320,15 @@ def cmd_validate(args: argparse.Namespace) -> int:
     for warning in summary.warnings:
         print(f"  warning: {warning['path']}: {warning['message']}")
     return EXIT_OK
+
+
+def _gas_density_rows(scene) -> list[tuple[str, str]]:
+    """How each ideal gas's density is taken (solver/gas_density.py), its default resolved."""
+    from solver.materials.ideal_gas import takes_grid_density
+
+    return [(f"gas {name}", "density from the grid" if takes_grid_density(scene, material)
+             else "density from its own volumes (J V0)")
+            for name, material in scene.materials.items() if material.model == "ideal_gas"]
 
 
 def _method_line(method) -> str:

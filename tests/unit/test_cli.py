@@ -52,6 +52,19 @@ def test_validate_prints_the_method_with_a_material_s_default(tmp_path, capsys):
     assert "method              ulmpm musl, linear, flip" in capsys.readouterr().out
 
 
+def test_validate_says_how_a_gas_takes_its_density(tmp_path, capsys):
+    """density_from_grid's default resolved: from the grid where the shape function has nodal
+    integrals (cubic B-splines), the particles' own volumes where it has not (GIMP)."""
+    scene = json.loads((EXAMPLES / "sod_shock_tube.json").read_text())
+    assert cli.main(["validate", scene_file(tmp_path, scene)]) == 0
+    assert f"{'gas air':<20}density from the grid" in capsys.readouterr().out
+    scene["method"]["shape_function"] = "gimp"
+    assert cli.main(["validate", scene_file(tmp_path, scene)]) == 0
+    assert f"{'gas air':<20}density from its own volumes (J V0)" in capsys.readouterr().out
+    assert cli.main(["validate", str(EXAMPLES / "two_disks.json")]) == 0
+    assert "gas " not in capsys.readouterr().out
+
+
 def test_validate_prints_every_error_with_its_path(tmp_path, capsys):
     scene = json.loads((EXAMPLES / "two_disks.json").read_text())
     scene["bodies"][1]["geometry"]["radius"] = -0.2
