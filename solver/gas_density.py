@@ -31,6 +31,7 @@ from functools import reduce
 
 import numpy as np
 
+from solver import kernels
 from solver.jit import njit
 from solver.materials.ideal_gas import takes_grid_density
 from solver.state import make_stencil
@@ -98,8 +99,6 @@ def axis_integrals(module, support: int, lower: float, h: float, cells: int) -> 
     """The integrals of the 1D functions of nodes 0 .. cells over the part of
     [lower, lower + cells h] where a particle may be (quadratic B-splines refuse the half
     cell at each end, where a particle's stencil would need a node beyond the grid)."""
-    from solver import kernels
-
     half = 0.5 * h   # the pieces of quadratic B-splines meet at the cells' middles, the others' at nodes
     centre = lower + half * (np.arange(2 * cells) + 0.5)
     x = np.concatenate([centre + 0.5 * half * s for s, _ in _GAUSS])[:, None]

@@ -27,9 +27,9 @@ class IdealGas(BaseMaterial):
     model: Literal["ideal_gas"]
     gamma: Annotated[float, Strict(), Field(gt=1)] = 1.4
     artificial_viscosity: ArtificialViscosity = Field(default_factory=ArtificialViscosity)
-    # After each stress update the particles take the grid's density (solver/gas_density.py):
+    # At the start of each step the particles take the grid's density (solver/gas_density.py):
     # their volumes J V0 drift from the room they take where a gas thins to about a particle a
-    # cell. None: wherever the scene allows it (solver.gas_density.gas_density_refusal).
+    # cell. None: wherever the scene allows it (grid_density_refusal below).
     density_from_grid: Annotated[bool, Strict()] | None = None
     # A gas expands to about one particle per cell (Sod's left plateau: 1.3 of the 3 it started
     # with), where the C1 cubic splines are the most accurate: L1 density error 0.0034 at cfl 0.5
