@@ -28,13 +28,14 @@ from __future__ import annotations
 
 import math
 from functools import reduce
+from types import SimpleNamespace
 
 import numpy as np
 
 from solver import kernels
 from solver.jit import njit
 from solver.materials.ideal_gas import takes_grid_density
-from solver.state import make_stencil
+from solver.state import Stencil, make_stencil
 
 NAME = "gas_density_work"
 _GAUSS = ((-math.sqrt(0.6), 5.0 / 9.0), (0.0, 8.0 / 9.0), (math.sqrt(0.6), 5.0 / 9.0))   # on [-1, 1]
@@ -65,10 +66,11 @@ class GridDensity:
         if self._stencil is None or self._stencil.w.shape[0] != p.count:   # (particles migrated)
             self._stencil = make_stencil(p.count, p.dimension, sim.wide_support)
         stencil = self._stencil
-        sim.domain.weights(sim.shape, sim.wide_spec, p.x, p, sim.grid, stencil)
         self._mass.fill(0.0)
-        for _, sl in gases:
-            scatter_mass(stencil.idx[sl], stencil.w[sl], p.mass[sl], self._mass)
+        for _, sl in gases:   # (the weights of the gas's particles only: a solid beside it needs none)
+            rows = Stencil(stencil.idx[sl], stencil.w[sl], stencil.dw[sl])
+            sim.domain.weights(sim.shape, sim.wide_spec, p.x[sl], p, sim.grid, rows)
+            scatter_mass(rows.idx, rows.w, p.mass[sl], self._mass)
         sim.domain.sum_ghosts(self._mass)
         sim.domain.share_nodes(self._mass)
         density = np.divide(self._mass, self._volume, out=np.zeros_like(self._mass), where=self._volume > 0)
@@ -103,7 +105,9 @@ def axis_integrals(module, support: int, lower: float, h: float, cells: int) -> 
     centre = lower + half * (np.arange(2 * cells) + 0.5)
     x = np.concatenate([centre + 0.5 * half * s for s, _ in _GAUSS])[:, None]
     weight = np.repeat([0.5 * half * g for _, g in _GAUSS], 2 * cells)
-    n, line, spec = x.shape[0], _Line(lower, h, cells), kernels.stencil_spec(1, support)
+    n, spec = x.shape[0], kernels.stencil_spec(1, support)
+    line = SimpleNamespace(lower=np.array([lower]), inv_h=np.array([1.0 / h]), cells=np.array([cells], np.int64),
+                           strides=np.array([1], np.int64))   # one axis of the grid, as the kernels take a grid
     idx, w, dw = np.zeros((n, support), dtype=np.int64), np.zeros((n, support)), np.zeros((n, support, 1))
     start = 0
     while start < n:   # a refused point stops the kernel: take it out and go on after it
@@ -115,16 +119,6 @@ def axis_integrals(module, support: int, lower: float, h: float, cells: int) -> 
         w[start + refused] = 0.0
         start += refused + 1
     return np.bincount(idx.ravel(), (w * weight[:, None]).ravel(), minlength=cells + 1)
-
-
-class _Line:
-    """One axis of the grid as the weights kernels take a grid."""
-
-    def __init__(self, lower: float, h: float, cells: int):
-        self.lower = np.array([lower])
-        self.inv_h = np.array([1.0 / h])
-        self.cells = np.array([cells], dtype=np.int64)
-        self.strides = np.array([1], dtype=np.int64)
 
 
 @njit(cache=True)
