@@ -31,10 +31,17 @@ os.environ.setdefault("MPM_FMA", "0")
 # a scene that names no thread count runs on one thread, in the kernels' serial twins, which
 # compile in about a third of the parallel forms' time (solver/jit.py); the tests about threads
 # name their counts and compile the parallel forms.
-if "MPM_CORES" not in os.environ:
+# The share is set here when the command line did not set MPM_CORES. pytest-xdist's controller
+# imports this file before it starts its workers, which inherit its environment: the flag tells a
+# worker that the MPM_CORES it sees is the controller's whole-machine figure, to divide again
+# (without it, every worker ran a large scene on all the cores and compiled the parallel forms).
+_SHARED_BY_THE_SUITE = "MPM_TEST_CORES_SHARED"
+if "MPM_CORES" not in os.environ or os.environ.get(_SHARED_BY_THE_SUITE) == "1":
     from solver.thread_count import available_cores
 
-    os.environ["MPM_CORES"] = str(max(1, available_cores() // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
+    cores = available_cores({})   # this process's CPUs, not an inherited MPM_CORES
+    os.environ["MPM_CORES"] = str(max(1, cores // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
+    os.environ[_SHARED_BY_THE_SUITE] = "1"
 
 SPREAD = {"unit/test_fused.py", "regression/test_regression.py"}
 
