@@ -29,6 +29,11 @@ class JobFiles:
 
     def __init__(self, jobs_dir: Path, job_id: str):
         self.dir = Path(jobs_dir) / parse_job_id(job_id)
+        self.scene = self.dir / "scene.json"
+        self.result = self.dir / "result.h5"
+        self.xdmf = self.dir / "result.xdmf"
+        self.log = self.dir / "solver.log"
+        self.previews = self.dir / "previews"
 
     def redact(self, text: str) -> str:
         """`text` (a log line, an error) without the server's paths: the job's folder becomes
@@ -36,26 +41,6 @@ class JobFiles:
         text = text.replace(str(self.dir.resolve()), "<job>").replace(str(self.dir), "<job>")
         data = self.dir.parent.parent
         return text.replace(str(data.resolve()), "<data>").replace(str(data), "<data>")
-
-    @property
-    def scene(self) -> Path:
-        return self.dir / "scene.json"
-
-    @property
-    def result(self) -> Path:
-        return self.dir / "result.h5"
-
-    @property
-    def xdmf(self) -> Path:
-        return self.dir / "result.xdmf"
-
-    @property
-    def log(self) -> Path:
-        return self.dir / "solver.log"
-
-    @property
-    def previews(self) -> Path:
-        return self.dir / "previews"
 
     def preview(self, frame: int, field: str) -> Path:
         """A cached rendering; `field` must already be checked against the known names."""
