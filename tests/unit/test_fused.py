@@ -695,15 +695,21 @@ def test_the_vectorised_mls_pass_names_the_first_inverted_particle_as_the_one_pa
     assert_the_same_inverted_particle_named(scene, "g2p_mls")
 
 
+def stepped_once(scene: dict, switch: str, on: bool) -> ExplicitMPM:
+    """The scene's simulation after one step, with the fused plan's `switch` (on) or without it."""
+    sim = ExplicitMPM(load_scene(scene))
+    if not on:
+        sim.phases.replan(without=(switch,))
+    sim.advance(2e-4)
+    return sim
+
+
 def assert_the_same_inverted_particle_named(scene: dict, switch: str) -> None:
     """With the fused plan's `switch` and without it, F_p turned over for three particles: the step
     fails naming the first of them, the same particle both ways."""
     named = []
     for split in (True, False):
-        sim = ExplicitMPM(load_scene(scene))
-        if not split:
-            sim.phases.replan(without=(switch,))
-        sim.advance(2e-4)
+        sim = stepped_once(scene, switch, split)
         assert sim.phases.plan.makes(switch) is split
         n = sim.particles.count
         for p in (n - 4, n - 2, n // 3):   # in the last block, and one earlier (the first block with two threads)
@@ -814,10 +820,7 @@ def assert_the_same_particle_named_outside_the_grid(scene: dict, switch: str, ke
     and `kernel` runs only with the switch on."""
     named = []
     for on in (True, False):
-        sim = ExplicitMPM(load_scene(scene))
-        if not on:
-            sim.phases.replan(without=(switch,))
-        sim.advance(2e-4)
+        sim = stepped_once(scene, switch, on)
         places = moved(sim.particles.count)
         for p, x in places:
             sim.particles.x[p] = x
