@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import warp as wp
 
-from mls_warp import bspline
+from mls_warp import gather_2d, scatter_2d
 from timing import report_rate
 
 f64 = wp.float64
@@ -23,22 +23,9 @@ def p2g(x: wp.array(dtype=wp.vec2d), v: wp.array(dtype=wp.vec2d), C: wp.array(dt
         grid_m: wp.array2d(dtype=wp.float64), grid_v: wp.array2d(dtype=wp.vec2d),
         dt: wp.float64, inv_dx: wp.float64, bulk: wp.float64):
     p = wp.tid()
-    X = x[p] * inv_dx
-    bx = int(X[0] - f64(0.5))
-    by = int(X[1] - f64(0.5))
-    fx = X[0] - f64(bx)
-    fy = X[1] - f64(by)
-    W = bspline(wp.vec3d(fx, fy, f64(1.0)))
     stress = -dt * f64(4.0) * bulk * vol[p] * (J[p] - f64(1.0)) * inv_dx * inv_dx
     affine = wp.mat22d(stress, f64(0.0), f64(0.0), stress) + mass[p] * C[p]
-    dx = f64(1.0) / inv_dx
-    mv = mass[p] * v[p]
-    for i in range(3):
-        for j in range(3):
-            w = W[i, 0] * W[j, 1]
-            dpos = wp.vec2d((f64(i) - fx) * dx, (f64(j) - fy) * dx)
-            wp.atomic_add(grid_v, bx + wp.int32(i), by + wp.int32(j), w * (mv + affine * dpos))
-            wp.atomic_add(grid_m, bx + wp.int32(i), by + wp.int32(j), w * mass[p])
+    scatter_2d(x[p], mass[p], v[p], affine, inv_dx, grid_m, grid_v)
 
 
 @wp.kernel
@@ -60,23 +47,7 @@ def grid(grid_m: wp.array2d(dtype=wp.float64), grid_v: wp.array2d(dtype=wp.vec2d
 def g2p(x: wp.array(dtype=wp.vec2d), v: wp.array(dtype=wp.vec2d), C: wp.array(dtype=wp.mat22d),
         J: wp.array(dtype=wp.float64), grid_v: wp.array2d(dtype=wp.vec2d), dt: wp.float64, inv_dx: wp.float64):
     p = wp.tid()
-    X = x[p] * inv_dx
-    bx = int(X[0] - f64(0.5))
-    by = int(X[1] - f64(0.5))
-    fx = X[0] - f64(bx)
-    fy = X[1] - f64(by)
-    W = bspline(wp.vec3d(fx, fy, f64(1.0)))
-    new_v = wp.vec2d()
-    new_C = wp.mat22d()
-    for i in range(3):
-        for j in range(3):
-            w = W[i, 0] * W[j, 1]
-            g = grid_v[bx + wp.int32(i), by + wp.int32(j)]
-            new_v = new_v + w * g
-            new_C = new_C + (f64(4.0) * inv_dx * w) * wp.outer(g, wp.vec2d(f64(i) - fx, f64(j) - fy))
-    v[p] = new_v
-    C[p] = new_C
-    x[p] = x[p] + dt * new_v
+    new_C = gather_2d(x, v, C, grid_v, dt, inv_dx, p)
     J[p] = J[p] * (f64(1.0) + dt * (new_C[0, 0] + new_C[1, 1]))
 
 
