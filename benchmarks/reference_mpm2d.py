@@ -14,13 +14,14 @@ from numba import njit
 
 @njit(cache=True)
 def _stencil(px, py, x0, y0, inv_h, nx):
+    """The first of the particle's 2 x 2 nodes and the hat weights of its nodes along x and along y."""
     sx = (px - x0) * inv_h
     sy = (py - y0) * inv_h
     i = int(sx)
     j = int(sy)
     fx = sx - i
     fy = sy - j
-    return i + nx * j, fx, fy
+    return i + nx * j, (1.0 - fx, fx), (1.0 - fy, fy)
 
 
 @njit(cache=True)
@@ -32,9 +33,7 @@ def _musl_step(dt, alpha, x, x_old, v, F, stress, mass, vol0, vol, x0, y0, h, nx
     gf[:] = 0.0
     # P2G: mass, momentum, internal force
     for p in range(n):
-        base, fx, fy = _stencil(x[p, 0], x[p, 1], x0, y0, inv_h, nx)
-        wx = (1.0 - fx, fx)
-        wy = (1.0 - fy, fy)
+        base, wx, wy = _stencil(x[p, 0], x[p, 1], x0, y0, inv_h, nx)
         m = mass[p]
         sxx, sxy, syy = vol[p] * stress[p, 0, 0], vol[p] * stress[p, 0, 1], vol[p] * stress[p, 1, 1]
         for b in range(2):
@@ -59,9 +58,7 @@ def _musl_step(dt, alpha, x, x_old, v, F, stress, mass, vol0, vol, x0, y0, h, nx
     # G2P with the double mapping
     gp[:] = 0.0
     for p in range(n):
-        base, fx, fy = _stencil(x[p, 0], x[p, 1], x0, y0, inv_h, nx)
-        wx = (1.0 - fx, fx)
-        wy = (1.0 - fy, fy)
+        base, wx, wy = _stencil(x[p, 0], x[p, 1], x0, y0, inv_h, nx)
         picx = picy = dvx = dvy = 0.0
         for b in range(2):
             for a in range(2):
@@ -90,9 +87,7 @@ def _musl_step(dt, alpha, x, x_old, v, F, stress, mass, vol0, vol, x0, y0, h, nx
             gv1[node, 0] = gv1[node, 1] = 0.0
     # velocity gradient at the old positions, F, volume, stress
     for p in range(n):
-        base, fx, fy = _stencil(x_old[p, 0], x_old[p, 1], x0, y0, inv_h, nx)
-        wx = (1.0 - fx, fx)
-        wy = (1.0 - fy, fy)
+        base, wx, wy = _stencil(x_old[p, 0], x_old[p, 1], x0, y0, inv_h, nx)
         lxx = lxy = lyx = lyy = 0.0
         for b in range(2):
             for a in range(2):
