@@ -13,11 +13,10 @@ import functools
 import json
 import sys
 import time
-from contextlib import contextmanager
 from datetime import datetime, timezone
 from importlib.metadata import entry_points
 from itertools import islice
-from typing import Callable, Iterator
+from typing import Callable
 
 from .client import Client, Job
 from .errors import MpmError
@@ -25,6 +24,7 @@ from .models import STATUSES
 from .progress import format_progress
 
 Handler = Callable[[argparse.Namespace], int]
+JobHandler = Callable[[argparse.Namespace, Job], int]
 
 
 def _connection_options() -> argparse.ArgumentParser:
@@ -41,20 +41,20 @@ def _client(args: argparse.Namespace) -> Client:
     return Client(args.server, token=args.token)
 
 
-def _job_parser(subparsers: argparse._SubParsersAction, name: str, func: Handler,
+def _job_parser(subparsers: argparse._SubParsersAction, name: str, func: JobHandler,
                 **parser_options: str) -> argparse.ArgumentParser:
-    """The parser of a command about one job: the connection options and the job's id."""
+    """The parser of a command about one job: the connection options and the job's id. The
+    command runs ``func(args, job)`` with the job that the id names, its client open."""
     parser = subparsers.add_parser(name, parents=[_connection_options()], **parser_options)
     parser.add_argument("job_id", metavar="ID", help="a job id or a unique start of it")
-    parser.set_defaults(func=func)
+
+    def run(args: argparse.Namespace) -> int:
+        with _client(args) as client:
+            return func(args, client.job(args.job_id))
+
+    run.__name__ = name  # _reports_errors names the command in its messages by it
+    parser.set_defaults(func=_reports_errors(run))
     return parser
-
-
-@contextmanager
-def _named_job(args: argparse.Namespace) -> Iterator[Job]:
-    """The job that ``args.job_id`` names, its client open for the block."""
-    with _client(args) as client:
-        yield client.job(args.job_id)
 
 
 def _reports_errors(handler: Handler) -> Handler:
@@ -166,10 +166,8 @@ def register_status(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--json", action="store_true", help="the whole job record as JSON")
 
 
-@_reports_errors
-def _status(args: argparse.Namespace) -> int:
-    with _named_job(args) as job:
-        record = job.record
+def _status(args: argparse.Namespace, job: Job) -> int:
+    record = job.record
     if args.json:
         print(json.dumps(record.model_dump(mode="json"), indent=2))
         return 0
@@ -196,13 +194,11 @@ def _job_action(name: str, act: Callable[[Job], str], help: str) -> Callable[[ar
     """The ``register_*`` function of a command that does one thing to a job (``act``) and
     prints the line ``act`` returns."""
 
-    def handler(args: argparse.Namespace) -> int:
-        with _named_job(args) as job:
-            print(act(job))
+    def handler(args: argparse.Namespace, job: Job) -> int:
+        print(act(job))
         return 0
 
-    handler.__name__ = name  # _reports_errors names the command in its messages by it
-    return lambda subparsers: _job_parser(subparsers, name, _reports_errors(handler), help=help)
+    return lambda subparsers: _job_parser(subparsers, name, handler, help=help)
 
 
 def _cancel(job: Job) -> str:
@@ -220,10 +216,8 @@ def register_download(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("file", metavar="FILE", help="where to write the HDF5 file")
 
 
-@_reports_errors
-def _download(args: argparse.Namespace) -> int:
-    with _named_job(args) as job:
-        path = job.download(args.file)
+def _download(args: argparse.Namespace, job: Job) -> int:
+    path = job.download(args.file)
     print(f"wrote {path}", file=sys.stderr)
     return 0
 
@@ -249,18 +243,16 @@ def register_log(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--poll", type=float, default=1.0, help="seconds between reads with --follow")
 
 
-@_reports_errors
-def _log(args: argparse.Namespace) -> int:
-    with _named_job(args) as job:
-        since = args.since
-        while True:
-            text, since = job.log(since)
-            sys.stdout.write(text)
-            sys.stdout.flush()
-            if not args.follow or (not text and job.refresh().record.finished):
-                return 0
-            if not text:
-                time.sleep(args.poll)
+def _log(args: argparse.Namespace, job: Job) -> int:
+    since = args.since
+    while True:
+        text, since = job.log(since)
+        sys.stdout.write(text)
+        sys.stdout.flush()
+        if not args.follow or (not text and job.refresh().record.finished):
+            return 0
+        if not text:
+            time.sleep(args.poll)
 
 
 # -- sweep -------------------------------------------------------------------------
