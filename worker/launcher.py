@@ -4,17 +4,15 @@
   the worker's host; `"nodes"` does not apply.
 - `slurm`: a Slurm batch job (worker/slurm.py), `"processes"` ranks over `"nodes"` nodes.
 
-Both answer `run(job_id, files, processes, nodes, on_progress=, should_stop=, ...)`
+Both answer `run(job_id, files, processes, nodes, control)` (a `worker.runner.RunControl`)
 with a `worker.runner.Outcome`, and `in_flight(files)` / `stop_leftover(files)` for a
 run that goes on without a worker (a Slurm job, after its worker stopped).
 """
 from __future__ import annotations
 
-from typing import Callable
-
 from core.paths import JobFiles
 from core.settings import Settings
-from worker.runner import Outcome, ProgressLine, run_solver, solver_command
+from worker.runner import Outcome, RunControl, run_solver, solver_command
 
 
 class LocalLauncher:
@@ -28,17 +26,13 @@ class LocalLauncher:
     def stop_leftover(self, files: JobFiles) -> None:
         """End a run that went on after its job ended (none does here)."""
 
-    def run(self, job_id: str, files: JobFiles, processes: int = 1, nodes: int = 1, *,
-            on_progress: Callable[[ProgressLine], None],
-            should_stop: Callable[[], str | None],
-            progress_interval: float = 0.5,
-            timeout_seconds: float | None = None,
-            env: dict[str, str] | None = None) -> Outcome:
+    def run(self, job_id: str, files: JobFiles, processes: int, nodes: int, control: RunControl) -> Outcome:
         command = solver_command(files.scene, files.dir, processes,
                                  checkpoint_seconds=self.settings.checkpoint_seconds)
-        return run_solver(command, files.log, on_progress=on_progress, should_stop=should_stop,
-                          progress_interval=progress_interval, grace_seconds=self.settings.cancel_grace_seconds,
-                          timeout_seconds=timeout_seconds, env=env)
+        return run_solver(command, files.log, on_progress=control.on_progress, should_stop=control.should_stop,
+                          progress_interval=control.progress_interval,
+                          grace_seconds=self.settings.cancel_grace_seconds,
+                          timeout_seconds=control.timeout_seconds, env=control.env)
 
 
 def launcher_for(settings: Settings):

@@ -35,6 +35,18 @@ class Outcome:
     lost_why: str | None = None  # a run lost through no fault of its own (worker/slurm.py): why
 
 
+@dataclass(frozen=True)
+class RunControl:
+    """What the task gives a launcher's run (worker/launcher.py): where its progress lines go
+    (the latest at most every `progress_interval` seconds), what it polls for a reason to stop,
+    its time limit and the solver's environment."""
+    on_progress: Callable[[ProgressLine], None]
+    should_stop: Callable[[], str | None]
+    progress_interval: float = 0.5
+    timeout_seconds: float | None = None
+    env: dict[str, str] | None = None
+
+
 def solver_command(scene: Path, out_dir: Path, processes: int = 1, progress: str = "json",
                    checkpoint_seconds: float | None = None) -> list[str]:
     """With `checkpoint_seconds`: checkpoints that often, and a run that goes on from the

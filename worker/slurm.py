@@ -47,11 +47,10 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from core.paths import JobFiles
 from core.settings import Settings
-from worker.runner import Outcome, ProgressLine, progress_item, tail
+from worker.runner import Outcome, ProgressLine, RunControl, progress_item, tail
 
 log = logging.getLogger("mpm.worker")
 
@@ -191,27 +190,20 @@ class SlurmLauncher:
         _run(["scancel", "--signal=TERM", *where, slurm_id], env)
 
     # -- one run, to its end ----------------------------------------------
-    def run(self, job_id: str, files: JobFiles, processes: int = 1, nodes: int = 1, *,
-            on_progress: Callable[[ProgressLine], None],
-            should_stop: Callable[[], str | None],
-            progress_interval: float = 0.5,
-            timeout_seconds: float | None = None,
-            env: dict[str, str] | None = None) -> Outcome:
-        slurm_id = self.attached(files, env)
+    def run(self, job_id: str, files: JobFiles, processes: int, nodes: int, control: RunControl) -> Outcome:
+        slurm_id = self.attached(files, control.env)
         # a new submission's lines come after those of the runs before it (appended to)
         reader = _LineReader(files.dir / self.STDOUT, files.log, from_end=slurm_id is None)
         if slurm_id is not None:
             log.info("following Slurm job %s of an earlier run", slurm_id, extra={"job_id": job_id})
         else:
             try:
-                slurm_id = self.submit(job_id, files, processes, nodes, env)
+                slurm_id = self.submit(job_id, files, processes, nodes, control.env)
             except (SlurmError, OSError, subprocess.SubprocessError) as error:
                 return Outcome(1, None, None, f"the job could not be submitted to Slurm: {error}")
-        return self._follow(job_id, files, slurm_id, processes, reader, on_progress, should_stop,
-                            progress_interval, timeout_seconds, env)
+        return self._follow(job_id, files, slurm_id, processes, reader, control)
 
-    def _follow(self, job_id, files, slurm_id, processes, reader, on_progress, should_stop, progress_interval,
-                timeout_seconds, env) -> Outcome:
+    def _follow(self, job_id, files, slurm_id, processes, reader, control: RunControl) -> Outcome:
         started = time.monotonic()
         stopped: str | None = None
         term_sent_at: float | None = None
@@ -224,7 +216,7 @@ class SlurmLauncher:
             for item in reader.read():
                 if item.get("event") != "done":
                     pending = item
-            state = query_state(slurm_id, env)
+            state = query_state(slurm_id, control.env)
             if state.state != last_state:
                 log.info("Slurm job %s: %s %s", slurm_id, state.state, state.reason,
                          extra={"job_id": job_id, "slurm_job": slurm_id})
@@ -232,8 +224,8 @@ class SlurmLauncher:
                     pending = {"stage": "queued"}
                 last_state = state.state
             now = time.monotonic()
-            if pending is not None and now - last_sent >= progress_interval:
-                on_progress(pending)
+            if pending is not None and now - last_sent >= control.progress_interval:
+                control.on_progress(pending)
                 pending, last_sent = None, now
             if state.state == "UNKNOWN":   # a slurmctld restarting: waited out for a while
                 unknown_since = unknown_since or now
@@ -243,28 +235,28 @@ class SlurmLauncher:
                 break
             else:
                 unknown_since = None
-            reason = should_stop()
+            reason = control.should_stop()
             if stopped is None:
                 stopped = reason
-                if stopped is None and timeout_seconds and now - started > timeout_seconds:
+                if stopped is None and control.timeout_seconds and now - started > control.timeout_seconds:
                     stopped = "timeout"
                 if stopped in ("shutdown", "lease_lost"):
                     # Slurm runs on: the worker that takes the job next follows it (slurm.jobid)
                     return Outcome(0, None, stopped, "")
                 if stopped is not None:
                     log.info("stopping Slurm job %s (%s)", slurm_id, stopped, extra={"job_id": job_id})
-                    self.stop(slurm_id, processes, env)
+                    self.stop(slurm_id, processes, control.env)
                     term_sent_at = now
             elif term_sent_at is not None and now - term_sent_at > self.settings.cancel_grace_seconds:
                 log.info("cancelling Slurm job %s", slurm_id, extra={"job_id": job_id})
-                self.cancel(slurm_id, env)   # SIGTERM to all, SIGKILL after Slurm's KillWait
+                self.cancel(slurm_id, control.env)   # SIGTERM to all, SIGKILL after Slurm's KillWait
                 term_sent_at = None
             time.sleep(self.poll_interval)
         for item in reader.read():   # the last lines, written before the job ended
             if item.get("event") != "done":
                 pending = item
         if pending is not None:
-            on_progress(pending)
+            control.on_progress(pending)
         return self._outcome(state, reader.done, stopped, files)
 
     @staticmethod

@@ -35,7 +35,7 @@ from core.store import JobStore
 from solver.checkpoint import checkpoint_path
 from worker.disk import DiskQuota
 from worker.launcher import launcher_for
-from worker.runner import Outcome
+from worker.runner import Outcome, RunControl
 
 log = logging.getLogger("mpm.worker")
 
@@ -151,8 +151,8 @@ def _run_leased(store: JobStore, job_id: str, job: dict[str, Any], worker: str, 
     while True:
         outcome = launcher.run(
             job_id, files, job.get("processes", 1), job.get("nodes") or 1,
-            on_progress=on_progress, should_stop=should_stop, progress_interval=settings.progress_interval,
-            timeout_seconds=settings.max_job_seconds, env=job_environment(settings))
+            RunControl(on_progress=on_progress, should_stop=should_stop, progress_interval=settings.progress_interval,
+                       timeout_seconds=settings.max_job_seconds, env=job_environment(settings)))
         if not _killed(outcome):
             break
         lost += 1
