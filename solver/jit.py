@@ -5,7 +5,8 @@ imports them from here, so no kernel's cache is set up before the cache is.
 A parallel kernel (`njit(parallel=True)`) comes in two forms from one source
 (`ThreadedKernel`): numba's parallel form, and a serial twin in which `prange` is `range`,
 run while this thread's solver runs on one thread (`use_threads`, set by
-solver/threads.py). The twin compiles in about a third of the time (two_disks' 23 kernels:
+solver/threads.py), and by a kernel called outside a run in a process that has one core
+(MPM_CORES=1, as a worker's share or a test worker's). The twin compiles in about a third of the time (two_disks' 23 kernels:
 7.8 s against 20.8 s), and gives the same bits, since the parallel form on one thread runs
 the same blocks in the same order. So a run on one thread (a small scene, an MPI rank
 sharing the cores, a test worker) never waits on numba's parallel compiler; each form is
@@ -20,17 +21,20 @@ from numba import njit as _numba_njit
 from numba import prange
 
 from solver import kernel_cache
+from solver.thread_count import available_cores
 
 kernel_cache.install()
 
 __all__ = ["njit", "prange", "ThreadedKernel", "use_threads"]
 
 _runs = threading.local()   # numba's thread count is per Python thread too (numba.set_num_threads)
+_ONE_CORE = available_cores() == 1   # read once: the process's share of the cores is fixed
 
 
-def use_threads(count: int) -> None:
-    """The thread count this Python thread's kernels run on: one runs the serial twins."""
-    _runs.one_thread = count == 1
+def use_threads(count: int | None) -> None:
+    """The thread count this Python thread's kernels run on: one runs the serial twins; None,
+    what a thread that never set it runs (the twins where the process has one core)."""
+    _runs.one_thread = _ONE_CORE if count is None else count == 1
 
 
 def _as_a_loop_body(flags):
@@ -86,7 +90,7 @@ class ThreadedKernel:
         return types.Dispatcher(self.parallel)
 
     def __call__(self, *args):
-        return (self.serial if getattr(_runs, "one_thread", False) else self.parallel)(*args)
+        return (self.serial if getattr(_runs, "one_thread", _ONE_CORE) else self.parallel)(*args)
 
 
 def njit(*args, twin: bool = False, **options):

@@ -13,6 +13,7 @@ longer reads; pytest-dev/pytest-xdist#1386), and silently.
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -42,6 +43,17 @@ if "MPM_CORES" not in os.environ or os.environ.get(_SHARED_BY_THE_SUITE) == "1":
     cores = available_cores({})   # this process's CPUs, not an inherited MPM_CORES
     os.environ["MPM_CORES"] = str(max(1, cores // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
     os.environ[_SHARED_BY_THE_SUITE] = "1"
+
+
+@pytest.fixture(autouse=True)
+def _kernels_in_the_workers_form():
+    """Each test starts with the kernels' default form (solver/jit.py `use_threads(None)`: the serial
+    twins on a worker's one core), so that a run on two threads earlier in this worker does not put
+    a later test's direct kernel calls on the parallel forms, which compile three times as long."""
+    jit = sys.modules.get("solver.jit")
+    if jit is not None:
+        jit.use_threads(None)
+
 
 SPREAD = {"unit/test_fused.py", "regression/test_regression.py"}
 

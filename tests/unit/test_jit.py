@@ -1,6 +1,7 @@
 """The parallel kernels' two forms (solver/jit.py): a run on one thread runs, and compiles,
 only the serial twins, and they give the bits of the parallel forms on one thread."""
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -88,3 +89,39 @@ def test_a_run_on_one_thread_loads_no_parallel_form(tmp_path, method):
     assert done.returncode == 0, done.stderr[-2000:]
     loaded = json.loads(done.stdout.splitlines()[-1])
     assert loaded["parallel"] == [] and loaded["twins"] >= 5, loaded
+
+
+_DIRECT_CALL = """
+import json
+import os
+import numpy as np
+from solver.jit import njit, prange
+
+@njit(parallel=True)
+def doubled(values):
+    out = np.empty_like(values)
+    for i in prange(values.shape[0]):
+        out[i] = 2.0 * values[i]
+    return out
+
+doubled(np.arange(3.0))
+print(json.dumps({"twin": bool(doubled.serial.signatures), "parallel": bool(doubled.parallel.signatures)}))
+"""
+
+
+@pytest.mark.parametrize("cores", [1, 2])
+def test_a_kernel_called_outside_a_run_takes_the_form_of_the_process_s_cores(cores):
+    """With one core (MPM_CORES=1: a service worker's share, a test worker's) the serial twin, with
+    more the parallel form; use_threads(None) goes back to that."""
+    environment = {**os.environ, "MPM_CORES": str(cores)}
+    done = subprocess.run([sys.executable, "-c", _DIRECT_CALL], cwd=ROOT, env=environment, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(done.stdout.splitlines()[-1]) == {"twin": cores == 1, "parallel": cores > 1}
+
+
+def test_use_threads_none_restores_the_process_s_default(restore_threads):
+    jit.use_threads(2)
+    assert jit._runs.one_thread is False
+    jit.use_threads(None)
+    assert jit._runs.one_thread is jit._ONE_CORE
