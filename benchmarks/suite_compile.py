@@ -1,11 +1,13 @@
 """Where a cold run of the test suite spends its compile time: numba's compile events, per test.
 
     rm -rf /tmp/suite-cache
-    MPM_CACHE_DIR=/tmp/suite-cache SUITE_COMPILE_OUT=/tmp/census.jsonl PYTHONPATH=benchmarks \\
-        python3 scripts/dev.py test -p suite_compile        # the suite, on an empty kernel cache
+    MPM_CACHE_DIR=/tmp/suite-cache SUITE_COMPILE_OUT=/tmp/census.jsonl \\
+        python3 scripts/dev.py test -p benchmarks.suite_compile   # the suite, on an empty kernel cache
     python benchmarks/suite_compile.py /tmp/census.jsonl    # the tables
 
-As a pytest plugin (`-p suite_compile`, benchmarks/ on the path), each test process appends
+As a pytest plugin (`-p benchmarks.suite_compile`, imported from the repository's root: with
+benchmarks/ itself on the path, benchmarks/service.py would hide the service package from the
+suite's `mpm serve`), each test process appends
 to SUITE_COMPILE_OUT one line per compilation numba made in it (the kernel, the test that
 caused it, its seconds) and one per test (its start and end). numba raises its `numba:compile`
 event only on a cache miss, after the kernel cache's compile lock (solver/kernel_cache.py): a
