@@ -195,7 +195,7 @@ DEFAULT_COMPILE_SECONDS = 30.0
 # A run on one thread compiles the kernels' serial twins (solver/jit.py): about this share
 # of the model's figures, which are the parallel forms' (docs/internals.md, "One thread,
 # serial twins": the twins' compile time over the parallel forms', cold, per example).
-ONE_THREAD_COMPILE = 0.36
+ONE_THREAD_COMPILE = 0.6
 # Parts of a scene that change no kernel: names, labels, output and timing.
 _NOT_COMPILED = {"name", "material", "units", "output", "time", "version"}
 

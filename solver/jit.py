@@ -93,12 +93,24 @@ class ThreadedKernel:
         return (self.serial if getattr(_runs, "one_thread", _ONE_CORE) else self.parallel)(*args)
 
 
-def njit(*args, twin: bool = False, **options):
+def _loop_body(function: FunctionType, options: dict):
+    """numba's dispatcher of a function compiled as the body of a parallel loop (`_as_a_loop_body`)."""
+    dispatcher = _numba_njit(**options)(function)
+    dispatcher._compiler._customize_flags = _as_a_loop_body
+    return dispatcher
+
+
+def njit(*args, twin: bool = False, loop_body: bool = False, **options):
     """numba's njit; with `parallel=True`, a ThreadedKernel. `twin=True` makes a ThreadedKernel
     of a function with no parallel loop of its own that calls parallel kernels, so that its
-    twin calls theirs (both its forms compile without numba's parallel passes)."""
-    if not (options.get("parallel") or twin):
+    twin calls theirs (both its forms compile without numba's parallel passes). `loop_body=True`
+    compiles a function that a parallel kernel's loop calls as that loop's body would be
+    (`_as_a_loop_body`): no two of its arrays may share memory."""
+    if not (options.get("parallel") or twin or loop_body):
         return _numba_njit(*args, **options)
     if args:
-        raise TypeError("njit(parallel=True) and njit(twin=True) take options only, as decorator factories")
+        raise TypeError("njit(parallel=True), njit(twin=True) and njit(loop_body=True) take options only, "
+                        "as decorator factories")
+    if loop_body:
+        return lambda function: _loop_body(function, options)
     return lambda function: ThreadedKernel(function, options)

@@ -15,6 +15,116 @@ from solver.lanes import exact as _lane_operations
 axpy, add_to_row = _lane_operations.axpy, _lane_operations.add_to_row
 
 
+@njit(cache=True, loop_body=True)
+def _p2g_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
+        grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad, dt):
+    """Thread t's block of `p2g`: particles lo to hi."""
+    support, affine_, loaded_, mls_, fold_, inline_ = variant
+    lower, h, inv_h, cells, strides, offset = frame
+    h0, h1 = h[0], h[1]
+    stride1 = strides[1]
+    d_inv0, d_inv1 = d_inv[0], d_inv[1]
+    shared_acc = acc.shape[0] == 1
+    S, affine, loaded, mls = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2, mls_.ndim == 2   # compile-time constants
+    fold, inline = fold_.ndim == 2, inline_.ndim == 2
+    gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)
+    gf = grid_force if fold else own(t, grid_force, copies_force)
+    bad[t] = -1
+    for p in range(np.uint64(lo), np.uint64(hi)):
+        sig00, sig01 = stress[p, 0, 0], stress[p, 0, 1]
+        sig10, sig11 = stress[p, 1, 0], stress[p, 1, 1]
+        okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+        oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+        if not (okx and oky):      # (no break: an early exit slows the whole loop)
+            if bad[t] < 0:
+                bad[t] = p
+            continue
+        m = mass[p]
+        ap = np.uint64(0) if shared_acc else p
+        mbx, mby = m * acc[ap, 0], m * acc[ap, 1]
+        mvx, mvy = m * v[p, 0], m * v[p, 1]
+        vol = volume[p]
+        if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w
+            if loaded:   # (without a body force dt m b is +0: adding it would change no sum)
+                mvx += dt * mbx
+                mvy += dt * mby
+            if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)
+                s00, s01 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1)
+                s10, s11 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1)
+            else:
+                s00, s01 = dt * (vol * sig00), dt * (vol * sig01)
+                s10, s11 = dt * (vol * sig10), dt * (vol * sig11)
+        elif mls:
+            s00, s01 = vol * sig00 * d_inv0, vol * sig01 * d_inv1
+            s10, s11 = vol * sig10 * d_inv0, vol * sig11 * d_inv1
+        else:
+            s00, s01 = vol * sig00, vol * sig01
+            s10, s11 = vol * sig10, vol * sig11
+        mc00 = mc01 = mc10 = mc11 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
+        if affine:
+            mc00, mc01 = m * C[p, 0, 0], m * C[p, 0, 1]
+            mc10, mc11 = m * C[p, 1, 0], m * C[p, 1, 1]
+        if fold and mls:
+            mc00, mc01 = mc00 - s00, mc01 - s01
+            mc10, mc11 = mc10 - s10, mc11 - s11
+        if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum
+            wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
+        for j in range(S):
+            dy = (j - fy) * h1
+            row = (iy + j) * stride1 - offset
+            rx = mvx + mc01 * dy
+            ry = mvy + mc11 * dy
+            fgx = s00 * wy[j]
+            fox = s01 * gy[j]
+            fwx = mbx * wy[j] - fox
+            fgy = s10 * wy[j]
+            foy = s11 * gy[j]
+            fwy = mby * wy[j] - foy
+            if fold and not mls:
+                qax = wy[j] * rx - fox
+                qbx = wy[j] * mc00
+                qay = wy[j] * ry - foy
+                qby = wy[j] * mc10
+            for i in range(S):
+                node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                w = wx[i] * wy[j]
+                if affine:
+                    dx = (i - fx) * h0
+                if fold:
+                    pass
+                elif mls:   # w (x_I - x_p); D_p^-1 is in s (the MLS gradient, solver/transfer.py)
+                    dwx = w * dx
+                    dwy = w * dy
+                else:
+                    dwx = gx[i] * wy[j]
+                    dwy = wx[i] * gy[j]
+                px, py = mvx, mvy
+                if affine:
+                    px = rx + mc00 * dx
+                    py = ry + mc10 * dx
+                gm[node] += w * m
+                if fold and not mls:   # w (m v + dt m b + m C (x_I - x_p)) - dt V sigma grad w (`_p2g_row`)
+                    gp[node, 0] += wx[i] * qax + wdx[i] * qbx - gx[i] * fgx
+                    gp[node, 1] += wx[i] * qay + wdx[i] * qby - gx[i] * fgy
+                else:
+                    gp[node, 0] += w * px
+                    gp[node, 1] += w * py
+                if fold:
+                    pass
+                elif mls and loaded:
+                    gf[node, 0] += w * mbx - s00 * dwx - s01 * dwy
+                    gf[node, 1] += w * mby - s10 * dwx - s11 * dwy
+                elif mls:
+                    gf[node, 0] -= s00 * dwx + s01 * dwy
+                    gf[node, 1] -= s10 * dwx + s11 * dwy
+                elif loaded:   # w mb - sigma grad w, its row factors taken once (`_p2g_row`)
+                    gf[node, 0] += wx[i] * fwx - gx[i] * fgx
+                    gf[node, 1] += wx[i] * fwy - gx[i] * fgy
+                else:
+                    gf[node, 0] -= wx[i] * fox + gx[i] * fgx
+                    gf[node, 1] -= wx[i] * foy + gx[i] * fgy
+
+
 @njit(parallel=True, cache=True)
 def p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
         grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad, dt):
@@ -27,117 +137,126 @@ def p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, fr
     cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of
     the other threads. `inline`: sigma_p is formed from F, L, V, V0 and the material's
     parameters `material` (where the module has a material's lines), not read from `stress`."""
-    support, affine_, loaded_, mls_, fold_, inline_ = variant
+    threads = copies_mass.shape[0] + 1
+    bounds = block_bounds(x.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _p2g_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, volume, stress, F, L, volume0,
+                material, acc, frame, d_inv, grid_mass, grid_mom, grid_force, copies_mass, copies_mom,
+                copies_force, bad, dt)
+    if variant[4].ndim == 2:   # (fold_)
+        _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+    else:
+        _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+
+
+@njit(cache=True, loop_body=True)
+def _g2p_block(t, lo, hi, variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,
+        flip, dt, d_inv, copies_mom, stress, material, bad):
+    """Thread t's block of `g2p`: particles lo to hi."""
+    support, mode_, affine_, blend_, mls_, l_is_c_, updates_ = variant
     lower, h, inv_h, cells, strides, offset = frame
     h0, h1 = h[0], h[1]
     stride1 = strides[1]
     d_inv0, d_inv1 = d_inv[0], d_inv[1]
-    threads = copies_mass.shape[0] + 1
-    shared_acc = acc.shape[0] == 1
-    bounds = block_bounds(x.shape[0], threads)
-    for t in prange(threads):
-        S, affine, loaded, mls = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2, mls_.ndim == 2   # compile-time constants
-        fold, inline = fold_.ndim == 2, inline_.ndim == 2
-        gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)
-        gf = grid_force if fold else own(t, grid_force, copies_force)
-        bad[t] = -1
-        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
-            sig00, sig01 = stress[p, 0, 0], stress[p, 0, 1]
-            sig10, sig11 = stress[p, 1, 0], stress[p, 1, 1]
-            okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            if not (okx and oky):      # (no break: an early exit slows the whole loop)
-                if bad[t] < 0:
-                    bad[t] = p
-                continue
-            m = mass[p]
-            ap = np.uint64(0) if shared_acc else p
-            mbx, mby = m * acc[ap, 0], m * acc[ap, 1]
-            mvx, mvy = m * v[p, 0], m * v[p, 1]
-            vol = volume[p]
-            if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w
-                if loaded:   # (without a body force dt m b is +0: adding it would change no sum)
-                    mvx += dt * mbx
-                    mvy += dt * mby
-                if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)
-                    s00, s01 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1)
-                    s10, s11 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1)
-                else:
-                    s00, s01 = dt * (vol * sig00), dt * (vol * sig01)
-                    s10, s11 = dt * (vol * sig10), dt * (vol * sig11)
-            elif mls:
-                s00, s01 = vol * sig00 * d_inv0, vol * sig01 * d_inv1
-                s10, s11 = vol * sig10 * d_inv0, vol * sig11 * d_inv1
+    S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2   # compile-time constants
+    mode, l_is_c, updates = mode_.ndim - 1, l_is_c_.ndim == 2, updates_.ndim == 2
+    gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom
+    bad[t] = -1
+    for p in range(np.uint64(lo), np.uint64(hi)):
+        _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+        _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+        vpx = vpy = dvx = dvy = 0.0
+        b00 = b01 = b10 = b11 = 0.0
+        l00 = l01 = l10 = l11 = 0.0
+        wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)   # (wx has 3 entries for every support)
+        for j in range(S):
+            dy = (j - fy) * h1
+            row = (iy + j) * stride1 - offset
+            sx = sy = tx = ty = ux = uy = ex = ey = 0.0
+            for i in range(S):
+                node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                vx, vy = v_new[node, 0], v_new[node, 1]
+                sx += wx[i] * vx
+                sy += wx[i] * vy
+                if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)
+                    tx += wdx[i] * vx
+                    ty += wdx[i] * vy
+                if mode != KINEMATICS and blend:
+                    ex += wx[i] * (vx - v_old[node, 0])
+                    ey += wx[i] * (vy - v_old[node, 1])
+                if mode != REMAP and not mls:
+                    ux += gx[i] * vx
+                    uy += gx[i] * vy
+            if mode != KINEMATICS:
+                vpx += wy[j] * sx
+                vpy += wy[j] * sy
+                if blend:
+                    dvx += wy[j] * ex
+                    dvy += wy[j] * ey
+            if affine and (mls or mode != KINEMATICS):
+                b00 += wy[j] * tx
+                b10 += wy[j] * ty
+                b01 += (wy[j] * dy) * sx
+                b11 += (wy[j] * dy) * sy
+            if mode != REMAP and not mls:
+                l00 += wy[j] * ux
+                l10 += wy[j] * uy
+                l01 += gy[j] * sx
+                l11 += gy[j] * sy
+        if mode != KINEMATICS:
+            if blend:
+                v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
+                v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
             else:
-                s00, s01 = vol * sig00, vol * sig01
-                s10, s11 = vol * sig10, vol * sig11
-            mc00 = mc01 = mc10 = mc11 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
+                v[p, 0], v[p, 1] = vpx, vpy
             if affine:
-                mc00, mc01 = m * C[p, 0, 0], m * C[p, 0, 1]
-                mc10, mc11 = m * C[p, 1, 0], m * C[p, 1, 1]
-            if fold and mls:
-                mc00, mc01 = mc00 - s00, mc01 - s01
-                mc10, mc11 = mc10 - s10, mc11 - s11
-            if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum
-                wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
+                C[p, 0, 0], C[p, 0, 1] = b00 * d_inv0, b01 * d_inv1
+                C[p, 1, 0], C[p, 1, 1] = b10 * d_inv0, b11 * d_inv1
+        if mode == REMAP:
+            rate[p, 0], rate[p, 1] = vpx, vpy
+            m = mass[p]
+            vrx, vry = v[p, 0], v[p, 1]
+            if affine:
+                cr00, cr01 = C[p, 0, 0], C[p, 0, 1]
+                cr10, cr11 = C[p, 1, 0], C[p, 1, 1]
             for j in range(S):
                 dy = (j - fy) * h1
                 row = (iy + j) * stride1 - offset
-                rx = mvx + mc01 * dy
-                ry = mvy + mc11 * dy
-                fgx = s00 * wy[j]
-                fox = s01 * gy[j]
-                fwx = mbx * wy[j] - fox
-                fgy = s10 * wy[j]
-                foy = s11 * gy[j]
-                fwy = mby * wy[j] - foy
-                if fold and not mls:
-                    qax = wy[j] * rx - fox
-                    qbx = wy[j] * mc00
-                    qay = wy[j] * ry - foy
-                    qby = wy[j] * mc10
                 for i in range(S):
                     node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                    w = wx[i] * wy[j]
+                    mw = m * (wx[i] * wy[j])
+                    px, py = vrx, vry
                     if affine:
                         dx = (i - fx) * h0
-                    if fold:
-                        pass
-                    elif mls:   # w (x_I - x_p); D_p^-1 is in s (the MLS gradient, solver/transfer.py)
-                        dwx = w * dx
-                        dwy = w * dy
-                    else:
-                        dwx = gx[i] * wy[j]
-                        dwy = wx[i] * gy[j]
-                    px, py = mvx, mvy
-                    if affine:
-                        px = rx + mc00 * dx
-                        py = ry + mc10 * dx
-                    gm[node] += w * m
-                    if fold and not mls:   # w (m v + dt m b + m C (x_I - x_p)) - dt V sigma grad w (`_p2g_row`)
-                        gp[node, 0] += wx[i] * qax + wdx[i] * qbx - gx[i] * fgx
-                        gp[node, 1] += wx[i] * qay + wdx[i] * qby - gx[i] * fgy
-                    else:
-                        gp[node, 0] += w * px
-                        gp[node, 1] += w * py
-                    if fold:
-                        pass
-                    elif mls and loaded:
-                        gf[node, 0] += w * mbx - s00 * dwx - s01 * dwy
-                        gf[node, 1] += w * mby - s10 * dwx - s11 * dwy
-                    elif mls:
-                        gf[node, 0] -= s00 * dwx + s01 * dwy
-                        gf[node, 1] -= s10 * dwx + s11 * dwy
-                    elif loaded:   # w mb - sigma grad w, its row factors taken once (`_p2g_row`)
-                        gf[node, 0] += wx[i] * fwx - gx[i] * fgx
-                        gf[node, 1] += wx[i] * fwy - gx[i] * fgy
-                    else:
-                        gf[node, 0] -= wx[i] * fox + gx[i] * fgx
-                        gf[node, 1] -= wx[i] * foy + gx[i] * fgy
-    if fold_.ndim == 2:
-        _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
-    else:
-        _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+                        px += cr00 * dx + cr01 * dy
+                        py += cr10 * dx + cr11 * dy
+                    gp[node, 0] += mw * px
+                    gp[node, 1] += mw * py
+            continue
+        if mode == USL:
+            x[p, 0] += dt * vpx
+            x[p, 1] += dt * vpy
+        else:
+            x[p, 0] += dt * rate[p, 0]
+            x[p, 1] += dt * rate[p, 1]
+        if mls:   # L_p = B_p D_p^-1: C_p itself after a USL gather
+            l00, l01 = b00 * d_inv0, b01 * d_inv1
+            l10, l11 = b10 * d_inv0, b11 * d_inv1
+        if not l_is_c:   # (else L_p is left to the particles' deferred update, solver/step/fused.py)
+            L[p, 0, 0], L[p, 0, 1] = l00, l01
+            L[p, 1, 0], L[p, 1, 1] = l10, l11
+        f00, f01 = F[p, 0, 0], F[p, 0, 1]
+        f10, f11 = F[p, 1, 0], F[p, 1, 1]
+        n00 = f00 + dt * l00 * f00 + dt * l01 * f10
+        n01 = f01 + dt * l00 * f01 + dt * l01 * f11
+        n10 = f10 + dt * l10 * f00 + dt * l11 * f10
+        n11 = f11 + dt * l10 * f01 + dt * l11 * f11
+        F[p, 0, 0], F[p, 0, 1] = n00, n01
+        F[p, 1, 0], F[p, 1, 1] = n10, n11
+        J = n00 * n11 - n01 * n10
+        volume[p] = J * volume0[p]
+        if J <= 0.0 and bad[t] < 0:
+            bad[t] = p
 
 
 @njit(parallel=True, cache=True)
@@ -153,116 +272,144 @@ def g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new
     inv_h, cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS). `l_is_c` (MLS, USL): L_p,
     which is C_p, is not written. `updates` (USL, KINEMATICS; where the module has a material's
     update lines): `stress` is updated from L_p with the parameters `material`."""
-    support, mode_, affine_, blend_, mls_, l_is_c_, updates_ = variant
-    lower, h, inv_h, cells, strides, offset = frame
+    threads = copies_mom.shape[0] + 1
+    remaps = variant[1].ndim - 1 == REMAP   # (mode_)
+    bounds = block_bounds(x.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _g2p_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, L, F, volume, volume0, rate,
+                frame, v_old, v_new, grid_mom, flip, dt, d_inv, copies_mom, stress, material, bad)
+    if remaps and copies_mom.shape[0] > 0:
+        add_node_copies(grid_mom, copies_mom)
+
+
+@njit(cache=True, loop_body=True)
+def _p2g_mls_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, lower, h, inv_h, cells,
+            strides, offset, d_inv, grid_mass, grid_mom, copies_mass, copies_mom, bad, dt):
+    """Thread t's block of `p2g_mls`: particles lo to hi."""
+    loaded_, inline_, vector_log_, shared_acc_ = variant
     h0, h1 = h[0], h[1]
     stride1 = strides[1]
-    threads = copies_mom.shape[0] + 1
-    remaps = mode_.ndim - 1 == REMAP
+    lower0, lower1 = lower[0], lower[1]
+    inv_h0, inv_h1 = inv_h[0], inv_h[1]
+    cells0, cells1 = cells[0], cells[1]
     d_inv0, d_inv1 = d_inv[0], d_inv[1]
-    bounds = block_bounds(x.shape[0], threads)
-    for t in prange(threads):
-        S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2   # compile-time constants
-        mode, l_is_c, updates = mode_.ndim - 1, l_is_c_.ndim == 2, updates_.ndim == 2
-        gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom
-        bad[t] = -1
-        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
-            _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            vpx = vpy = dvx = dvy = 0.0
-            b00 = b01 = b10 = b11 = 0.0
-            l00 = l01 = l10 = l11 = 0.0
-            wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)   # (wx has 3 entries for every support)
+    acc0x, acc0y = (acc[0], acc[1]) if acc.shape[0] >= 2 else (0.0, 0.0)
+    S, loaded, inline = 3, loaded_.ndim == 2, inline_.ndim == 2   # compile-time constants
+    vector_log, shared_acc = vector_log_.ndim == 2, shared_acc_.ndim == 2
+    gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)
+    first, buf = np.empty((2, CHUNK), dtype=np.int64), np.empty((15, CHUNK))
+    bad[t] = -1
+    start = max(lo, 0)
+    total = hi - start
+    for chunk in range((total + CHUNK - 1) // CHUNK):
+        c = start + chunk * CHUNK   # (c >= 0 known: LLVM vectorises the loop below)
+        n = min(CHUNK, total - chunk * CHUNK)
+        far = outside = 0
+        for k in range(n):
+            p = c + k
+            sig00, sig01 = stress[p, 0, 0], stress[p, 0, 1]
+            sig10, sig11 = stress[p, 1, 0], stress[p, 1, 1]
+            atx = (x[2 * p + 0] - lower0) * inv_h0
+            okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
+            ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
+            aty = (x[2 * p + 1] - lower1) * inv_h1
+            oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
+            iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
+            inside = okx & oky
+            fx = atx - ix
+            wx = _quadratic(fx)
+            fy = aty - iy
+            wy = _quadratic(fy)
+            outside += not inside
+            m = mass[p]
+            if shared_acc:   # (a compile-time constant: a load from a selected index keeps the loop scalar)
+                mbx, mby = m * acc0x, m * acc0y
+            else:
+                mbx, mby = m * acc[2 * p + 0], m * acc[2 * p + 1]
+            mvx, mvy = m * v[2 * p + 0], m * v[2 * p + 1]
+            vol = volume[p]
+            if loaded:
+                mvx += dt * mbx
+                mvy += dt * mby
+            s00, s01 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1)
+            s10, s11 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1)
+            mc00 = m * C[4 * p + 0] - s00
+            mc01 = m * C[4 * p + 1] - s01
+            mc10 = m * C[4 * p + 2] - s10
+            mc11 = m * C[4 * p + 3] - s11
+            first[0, k] = ix
+            first[1, k] = iy
+            buf[0, k] = fx
+            buf[1, k] = fy
+            buf[2, k] = wx[0]
+            buf[3, k] = wx[1]
+            buf[4, k] = wx[2]
+            buf[5, k] = wy[0]
+            buf[6, k] = wy[1]
+            buf[7, k] = wy[2]
+            buf[8, k] = m
+            buf[9, k] = mvx
+            buf[10, k] = mvy
+            buf[11, k] = mc00
+            buf[12, k] = mc01
+            buf[13, k] = mc10
+            buf[14, k] = mc11
+        if outside:   # (the step fails) the first such particle; the others add nothing
+            for k in range(n):
+                p = c + k
+                atx = (x[2 * p + 0] - lower0) * inv_h0
+                okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
+                ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
+                aty = (x[2 * p + 1] - lower1) * inv_h1
+                oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
+                iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
+                inside = okx & oky
+                if not inside:
+                    if bad[t] < 0:
+                        bad[t] = p
+                    buf[0, k] = 0.0
+                    buf[1, k] = 0.0
+                    buf[2, k] = 0.0
+                    buf[3, k] = 0.0
+                    buf[4, k] = 0.0
+                    buf[5, k] = 0.0
+                    buf[6, k] = 0.0
+                    buf[7, k] = 0.0
+                    buf[8, k] = 0.0
+                    buf[9, k] = 0.0
+                    buf[10, k] = 0.0
+                    buf[11, k] = 0.0
+                    buf[12, k] = 0.0
+                    buf[13, k] = 0.0
+                    buf[14, k] = 0.0
+        for k in range(n):
+            ix = first[0, k]
+            iy = first[1, k]
+            fx = buf[0, k]
+            fy = buf[1, k]
+            m = buf[8, k]
+            mvx = buf[9, k]
+            mvy = buf[10, k]
+            mc00 = buf[11, k]
+            mc01 = buf[12, k]
+            mc10 = buf[13, k]
+            mc11 = buf[14, k]
+            wx = buf[2, k], buf[3, k], buf[4, k]
+            wy = buf[5, k], buf[6, k], buf[7, k]
             for j in range(S):
                 dy = (j - fy) * h1
                 row = (iy + j) * stride1 - offset
-                sx = sy = tx = ty = ux = uy = ex = ey = 0.0
+                rx = mvx + mc01 * dy
+                ry = mvy + mc11 * dy
                 for i in range(S):
                     node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                    vx, vy = v_new[node, 0], v_new[node, 1]
-                    sx += wx[i] * vx
-                    sy += wx[i] * vy
-                    if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)
-                        tx += wdx[i] * vx
-                        ty += wdx[i] * vy
-                    if mode != KINEMATICS and blend:
-                        ex += wx[i] * (vx - v_old[node, 0])
-                        ey += wx[i] * (vy - v_old[node, 1])
-                    if mode != REMAP and not mls:
-                        ux += gx[i] * vx
-                        uy += gx[i] * vy
-                if mode != KINEMATICS:
-                    vpx += wy[j] * sx
-                    vpy += wy[j] * sy
-                    if blend:
-                        dvx += wy[j] * ex
-                        dvy += wy[j] * ey
-                if affine and (mls or mode != KINEMATICS):
-                    b00 += wy[j] * tx
-                    b10 += wy[j] * ty
-                    b01 += (wy[j] * dy) * sx
-                    b11 += (wy[j] * dy) * sy
-                if mode != REMAP and not mls:
-                    l00 += wy[j] * ux
-                    l10 += wy[j] * uy
-                    l01 += gy[j] * sx
-                    l11 += gy[j] * sy
-            if mode != KINEMATICS:
-                if blend:
-                    v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
-                    v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
-                else:
-                    v[p, 0], v[p, 1] = vpx, vpy
-                if affine:
-                    C[p, 0, 0], C[p, 0, 1] = b00 * d_inv0, b01 * d_inv1
-                    C[p, 1, 0], C[p, 1, 1] = b10 * d_inv0, b11 * d_inv1
-            if mode == REMAP:
-                rate[p, 0], rate[p, 1] = vpx, vpy
-                m = mass[p]
-                vrx, vry = v[p, 0], v[p, 1]
-                if affine:
-                    cr00, cr01 = C[p, 0, 0], C[p, 0, 1]
-                    cr10, cr11 = C[p, 1, 0], C[p, 1, 1]
-                for j in range(S):
-                    dy = (j - fy) * h1
-                    row = (iy + j) * stride1 - offset
-                    for i in range(S):
-                        node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        mw = m * (wx[i] * wy[j])
-                        px, py = vrx, vry
-                        if affine:
-                            dx = (i - fx) * h0
-                            px += cr00 * dx + cr01 * dy
-                            py += cr10 * dx + cr11 * dy
-                        gp[node, 0] += mw * px
-                        gp[node, 1] += mw * py
-                continue
-            if mode == USL:
-                x[p, 0] += dt * vpx
-                x[p, 1] += dt * vpy
-            else:
-                x[p, 0] += dt * rate[p, 0]
-                x[p, 1] += dt * rate[p, 1]
-            if mls:   # L_p = B_p D_p^-1: C_p itself after a USL gather
-                l00, l01 = b00 * d_inv0, b01 * d_inv1
-                l10, l11 = b10 * d_inv0, b11 * d_inv1
-            if not l_is_c:   # (else L_p is left to the particles' deferred update, solver/step/fused.py)
-                L[p, 0, 0], L[p, 0, 1] = l00, l01
-                L[p, 1, 0], L[p, 1, 1] = l10, l11
-            f00, f01 = F[p, 0, 0], F[p, 0, 1]
-            f10, f11 = F[p, 1, 0], F[p, 1, 1]
-            n00 = f00 + dt * l00 * f00 + dt * l01 * f10
-            n01 = f01 + dt * l00 * f01 + dt * l01 * f11
-            n10 = f10 + dt * l10 * f00 + dt * l11 * f10
-            n11 = f11 + dt * l10 * f01 + dt * l11 * f11
-            F[p, 0, 0], F[p, 0, 1] = n00, n01
-            F[p, 1, 0], F[p, 1, 1] = n10, n11
-            J = n00 * n11 - n01 * n10
-            volume[p] = J * volume0[p]
-            if J <= 0.0 and bad[t] < 0:
-                bad[t] = p
-    if remaps and copies_mom.shape[0] > 0:
-        add_node_copies(grid_mom, copies_mom)
+                    w = wx[i] * wy[j]
+                    dx = (i - fx) * h0
+                    px = rx + mc00 * dx
+                    py = ry + mc10 * dx
+                    gm[node] += w * m
+                    gp[node, 0] += w * px
+                    gp[node, 1] += w * py
 
 
 @njit(parallel=True, cache=True)
@@ -273,6 +420,19 @@ def p2g_mls(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc
     (loaded, inline, vector_log, shared_acc) constants; vector_log: log_near_one is libm's log
     here; shared_acc: acc is one row for all.
     bad[t]: first particle of block t outside the grid."""
+    threads = copies_mass.shape[0] + 1
+    bounds = block_bounds(volume.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _p2g_mls_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, volume, stress, F, L,
+                volume0, material, acc, lower, h, inv_h, cells, strides, offset, d_inv, grid_mass, grid_mom,
+                copies_mass, copies_mom, bad, dt)
+    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+
+
+@njit(cache=True, loop_body=True)
+def _p2g_mls_lanes_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, lower, h, inv_h, cells,
+            strides, offset, d_inv, grid_mass, grid_mom, lanes, bad, dt):
+    """Thread t's block of `p2g_mls_lanes`: particles lo to hi."""
     loaded_, inline_, vector_log_, shared_acc_ = variant
     h0, h1 = h[0], h[1]
     stride1 = strides[1]
@@ -280,25 +440,71 @@ def p2g_mls(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc
     inv_h0, inv_h1 = inv_h[0], inv_h[1]
     cells0, cells1 = cells[0], cells[1]
     d_inv0, d_inv1 = d_inv[0], d_inv[1]
-    threads = copies_mass.shape[0] + 1
     acc0x, acc0y = (acc[0], acc[1]) if acc.shape[0] >= 2 else (0.0, 0.0)
-    bounds = block_bounds(volume.shape[0], threads)
-    for t in prange(threads):
-        S, loaded, inline = 3, loaded_.ndim == 2, inline_.ndim == 2   # compile-time constants
-        vector_log, shared_acc = vector_log_.ndim == 2, shared_acc_.ndim == 2
-        gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)
-        first, buf = np.empty((2, CHUNK), dtype=np.int64), np.empty((15, CHUNK))
-        bad[t] = -1
-        start = max(bounds[t], 0)
-        total = bounds[t + 1] - start
-        for chunk in range((total + CHUNK - 1) // CHUNK):
-            c = start + chunk * CHUNK   # (c >= 0 known: LLVM vectorises the loop below)
-            n = min(CHUNK, total - chunk * CHUNK)
-            far = outside = 0
+    S, loaded, inline = 3, loaded_.ndim == 2, inline_.ndim == 2   # compile-time constants
+    vector_log, shared_acc = vector_log_.ndim == 2, shared_acc_.ndim == 2
+    gl = lanes[t]
+    gl[:, :] = 0.0   # (by the thread that adds into them)
+    first, buf = np.empty((2, CHUNK), dtype=np.int64), np.empty((15, CHUNK))
+    bad[t] = -1
+    start = max(lo, 0)
+    total = hi - start
+    for chunk in range((total + CHUNK - 1) // CHUNK):
+        c = start + chunk * CHUNK   # (c >= 0 known: LLVM vectorises the loop below)
+        n = min(CHUNK, total - chunk * CHUNK)
+        far = outside = 0
+        for k in range(n):
+            p = c + k
+            sig00, sig01 = stress[p, 0, 0], stress[p, 0, 1]
+            sig10, sig11 = stress[p, 1, 0], stress[p, 1, 1]
+            atx = (x[2 * p + 0] - lower0) * inv_h0
+            okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
+            ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
+            aty = (x[2 * p + 1] - lower1) * inv_h1
+            oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
+            iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
+            inside = okx & oky
+            fx = atx - ix
+            wx = _quadratic(fx)
+            fy = aty - iy
+            wy = _quadratic(fy)
+            outside += not inside
+            m = mass[p]
+            if shared_acc:   # (a compile-time constant: a load from a selected index keeps the loop scalar)
+                mbx, mby = m * acc0x, m * acc0y
+            else:
+                mbx, mby = m * acc[2 * p + 0], m * acc[2 * p + 1]
+            mvx, mvy = m * v[2 * p + 0], m * v[2 * p + 1]
+            vol = volume[p]
+            if loaded:
+                mvx += dt * mbx
+                mvy += dt * mby
+            s00, s01 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1)
+            s10, s11 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1)
+            mc00 = m * C[4 * p + 0] - s00
+            mc01 = m * C[4 * p + 1] - s01
+            mc10 = m * C[4 * p + 2] - s10
+            mc11 = m * C[4 * p + 3] - s11
+            first[0, k] = ix
+            first[1, k] = iy
+            buf[0, k] = fx
+            buf[1, k] = fy
+            buf[2, k] = wx[0]
+            buf[3, k] = wx[1]
+            buf[4, k] = wx[2]
+            buf[5, k] = wy[0]
+            buf[6, k] = wy[1]
+            buf[7, k] = wy[2]
+            buf[8, k] = m
+            buf[9, k] = mvx
+            buf[10, k] = mvy
+            buf[11, k] = mc00
+            buf[12, k] = mc01
+            buf[13, k] = mc10
+            buf[14, k] = mc11
+        if outside:   # (the step fails) the first such particle; the others add nothing
             for k in range(n):
                 p = c + k
-                sig00, sig01 = stress[p, 0, 0], stress[p, 0, 1]
-                sig10, sig11 = stress[p, 1, 0], stress[p, 1, 1]
                 atx = (x[2 * p + 0] - lower0) * inv_h0
                 okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
                 ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
@@ -306,101 +512,50 @@ def p2g_mls(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc
                 oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
                 iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
                 inside = okx & oky
-                fx = atx - ix
-                wx = _quadratic(fx)
-                fy = aty - iy
-                wy = _quadratic(fy)
-                outside += not inside
-                m = mass[p]
-                if shared_acc:   # (a compile-time constant: a load from a selected index keeps the loop scalar)
-                    mbx, mby = m * acc0x, m * acc0y
-                else:
-                    mbx, mby = m * acc[2 * p + 0], m * acc[2 * p + 1]
-                mvx, mvy = m * v[2 * p + 0], m * v[2 * p + 1]
-                vol = volume[p]
-                if loaded:
-                    mvx += dt * mbx
-                    mvy += dt * mby
-                s00, s01 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1)
-                s10, s11 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1)
-                mc00 = m * C[4 * p + 0] - s00
-                mc01 = m * C[4 * p + 1] - s01
-                mc10 = m * C[4 * p + 2] - s10
-                mc11 = m * C[4 * p + 3] - s11
-                first[0, k] = ix
-                first[1, k] = iy
-                buf[0, k] = fx
-                buf[1, k] = fy
-                buf[2, k] = wx[0]
-                buf[3, k] = wx[1]
-                buf[4, k] = wx[2]
-                buf[5, k] = wy[0]
-                buf[6, k] = wy[1]
-                buf[7, k] = wy[2]
-                buf[8, k] = m
-                buf[9, k] = mvx
-                buf[10, k] = mvy
-                buf[11, k] = mc00
-                buf[12, k] = mc01
-                buf[13, k] = mc10
-                buf[14, k] = mc11
-            if outside:   # (the step fails) the first such particle; the others add nothing
-                for k in range(n):
-                    p = c + k
-                    atx = (x[2 * p + 0] - lower0) * inv_h0
-                    okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
-                    ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
-                    aty = (x[2 * p + 1] - lower1) * inv_h1
-                    oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
-                    iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
-                    inside = okx & oky
-                    if not inside:
-                        if bad[t] < 0:
-                            bad[t] = p
-                        buf[0, k] = 0.0
-                        buf[1, k] = 0.0
-                        buf[2, k] = 0.0
-                        buf[3, k] = 0.0
-                        buf[4, k] = 0.0
-                        buf[5, k] = 0.0
-                        buf[6, k] = 0.0
-                        buf[7, k] = 0.0
-                        buf[8, k] = 0.0
-                        buf[9, k] = 0.0
-                        buf[10, k] = 0.0
-                        buf[11, k] = 0.0
-                        buf[12, k] = 0.0
-                        buf[13, k] = 0.0
-                        buf[14, k] = 0.0
-            for k in range(n):
-                ix = first[0, k]
-                iy = first[1, k]
-                fx = buf[0, k]
-                fy = buf[1, k]
-                m = buf[8, k]
-                mvx = buf[9, k]
-                mvy = buf[10, k]
-                mc00 = buf[11, k]
-                mc01 = buf[12, k]
-                mc10 = buf[13, k]
-                mc11 = buf[14, k]
-                wx = buf[2, k], buf[3, k], buf[4, k]
-                wy = buf[5, k], buf[6, k], buf[7, k]
-                for j in range(S):
-                    dy = (j - fy) * h1
-                    row = (iy + j) * stride1 - offset
-                    rx = mvx + mc01 * dy
-                    ry = mvy + mc11 * dy
-                    for i in range(S):
-                        node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        w = wx[i] * wy[j]
-                        dx = (i - fx) * h0
-                        px = rx + mc00 * dx
-                        py = ry + mc10 * dx
-                        gm[node] += w * m
-                        gp[node, 0] += w * px
-                        gp[node, 1] += w * py
-    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+                if not inside:
+                    if bad[t] < 0:
+                        bad[t] = p
+                    buf[0, k] = 0.0
+                    buf[1, k] = 0.0
+                    buf[2, k] = 0.0
+                    buf[3, k] = 0.0
+                    buf[4, k] = 0.0
+                    buf[5, k] = 0.0
+                    buf[6, k] = 0.0
+                    buf[7, k] = 0.0
+                    buf[8, k] = 0.0
+                    buf[9, k] = 0.0
+                    buf[10, k] = 0.0
+                    buf[11, k] = 0.0
+                    buf[12, k] = 0.0
+                    buf[13, k] = 0.0
+                    buf[14, k] = 0.0
+        for k in range(n):
+            ix = first[0, k]
+            iy = first[1, k]
+            fx = buf[0, k]
+            fy = buf[1, k]
+            m = buf[8, k]
+            mvx = buf[9, k]
+            mvy = buf[10, k]
+            mc00 = buf[11, k]
+            mc01 = buf[12, k]
+            mc10 = buf[13, k]
+            mc11 = buf[14, k]
+            wx = buf[2, k], buf[3, k], buf[4, k]
+            wy = buf[5, k], buf[6, k], buf[7, k]
+            column = lanes_of(0.0, mc00, mc10, 0.0)
+            for j in range(S):
+                dy = (j - fy) * h1
+                row = (iy + j) * stride1 - offset
+                rx = mvx + mc01 * dy
+                ry = mvy + mc11 * dy
+                base = lanes_of(m, rx, ry, 0.0)
+                for i in range(S):
+                    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                    w = wx[i] * wy[j]
+                    dx = (i - fx) * h0
+                    add_to_row(gl, node, w, axpy(dx, column, base))
 
 
 @njit(parallel=True, cache=True)
@@ -411,133 +566,145 @@ def p2g_mls_lanes(variant, x, v, C, mass, volume, stress, F, L, volume0, materia
     (loaded, inline, vector_log, shared_acc) constants; vector_log: log_near_one is libm's log
     here; shared_acc: acc is one row for all.
     bad[t]: first particle of block t outside the grid."""
-    loaded_, inline_, vector_log_, shared_acc_ = variant
+    threads = lanes.shape[0]
+    bounds = block_bounds(volume.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _p2g_mls_lanes_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, volume, stress, F,
+                L, volume0, material, acc, lower, h, inv_h, cells, strides, offset, d_inv, grid_mass, grid_mom,
+                lanes, bad, dt)
+    unpack_mass_momentum(grid_mass, grid_mom, lanes)
+
+
+@njit(cache=True, loop_body=True)
+def _g2p_mls_block(t, lo, hi, x, v, C, F, v_new, volume, volume0, lower, h, inv_h, cells, strides, offset, d_inv, dt,
+            threads, bad):
+    """Thread t's block of `g2p_mls`: particles lo to hi."""
     h0, h1 = h[0], h[1]
     stride1 = strides[1]
     lower0, lower1 = lower[0], lower[1]
     inv_h0, inv_h1 = inv_h[0], inv_h[1]
     cells0, cells1 = cells[0], cells[1]
     d_inv0, d_inv1 = d_inv[0], d_inv[1]
-    threads = lanes.shape[0]
-    acc0x, acc0y = (acc[0], acc[1]) if acc.shape[0] >= 2 else (0.0, 0.0)
-    bounds = block_bounds(volume.shape[0], threads)
-    for t in prange(threads):
-        S, loaded, inline = 3, loaded_.ndim == 2, inline_.ndim == 2   # compile-time constants
-        vector_log, shared_acc = vector_log_.ndim == 2, shared_acc_.ndim == 2
-        gl = lanes[t]
-        gl[:, :] = 0.0   # (by the thread that adds into them)
-        first, buf = np.empty((2, CHUNK), dtype=np.int64), np.empty((15, CHUNK))
-        bad[t] = -1
-        start = max(bounds[t], 0)
-        total = bounds[t + 1] - start
-        for chunk in range((total + CHUNK - 1) // CHUNK):
-            c = start + chunk * CHUNK   # (c >= 0 known: LLVM vectorises the loop below)
-            n = min(CHUNK, total - chunk * CHUNK)
-            far = outside = 0
-            for k in range(n):
-                p = c + k
-                sig00, sig01 = stress[p, 0, 0], stress[p, 0, 1]
-                sig10, sig11 = stress[p, 1, 0], stress[p, 1, 1]
-                atx = (x[2 * p + 0] - lower0) * inv_h0
-                okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
-                ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
-                aty = (x[2 * p + 1] - lower1) * inv_h1
-                oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
-                iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
-                inside = okx & oky
-                fx = atx - ix
-                wx = _quadratic(fx)
-                fy = aty - iy
-                wy = _quadratic(fy)
-                outside += not inside
-                m = mass[p]
-                if shared_acc:   # (a compile-time constant: a load from a selected index keeps the loop scalar)
-                    mbx, mby = m * acc0x, m * acc0y
-                else:
-                    mbx, mby = m * acc[2 * p + 0], m * acc[2 * p + 1]
-                mvx, mvy = m * v[2 * p + 0], m * v[2 * p + 1]
-                vol = volume[p]
-                if loaded:
-                    mvx += dt * mbx
-                    mvy += dt * mby
-                s00, s01 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1)
-                s10, s11 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1)
-                mc00 = m * C[4 * p + 0] - s00
-                mc01 = m * C[4 * p + 1] - s01
-                mc10 = m * C[4 * p + 2] - s10
-                mc11 = m * C[4 * p + 3] - s11
-                first[0, k] = ix
-                first[1, k] = iy
-                buf[0, k] = fx
-                buf[1, k] = fy
-                buf[2, k] = wx[0]
-                buf[3, k] = wx[1]
-                buf[4, k] = wx[2]
-                buf[5, k] = wy[0]
-                buf[6, k] = wy[1]
-                buf[7, k] = wy[2]
-                buf[8, k] = m
-                buf[9, k] = mvx
-                buf[10, k] = mvy
-                buf[11, k] = mc00
-                buf[12, k] = mc01
-                buf[13, k] = mc10
-                buf[14, k] = mc11
-            if outside:   # (the step fails) the first such particle; the others add nothing
-                for k in range(n):
-                    p = c + k
-                    atx = (x[2 * p + 0] - lower0) * inv_h0
-                    okx = (atx >= 0.5 - TOUCH) & (atx <= cells0 - 0.5 + TOUCH)
-                    ix = min(max(int(atx - 0.5), 0), cells0 - 2) if okx else 0
-                    aty = (x[2 * p + 1] - lower1) * inv_h1
-                    oky = (aty >= 0.5 - TOUCH) & (aty <= cells1 - 0.5 + TOUCH)
-                    iy = min(max(int(aty - 0.5), 0), cells1 - 2) if oky else 0
-                    inside = okx & oky
-                    if not inside:
-                        if bad[t] < 0:
-                            bad[t] = p
-                        buf[0, k] = 0.0
-                        buf[1, k] = 0.0
-                        buf[2, k] = 0.0
-                        buf[3, k] = 0.0
-                        buf[4, k] = 0.0
-                        buf[5, k] = 0.0
-                        buf[6, k] = 0.0
-                        buf[7, k] = 0.0
-                        buf[8, k] = 0.0
-                        buf[9, k] = 0.0
-                        buf[10, k] = 0.0
-                        buf[11, k] = 0.0
-                        buf[12, k] = 0.0
-                        buf[13, k] = 0.0
-                        buf[14, k] = 0.0
-            for k in range(n):
-                ix = first[0, k]
-                iy = first[1, k]
-                fx = buf[0, k]
-                fy = buf[1, k]
-                m = buf[8, k]
-                mvx = buf[9, k]
-                mvy = buf[10, k]
-                mc00 = buf[11, k]
-                mc01 = buf[12, k]
-                mc10 = buf[13, k]
-                mc11 = buf[14, k]
-                wx = buf[2, k], buf[3, k], buf[4, k]
-                wy = buf[5, k], buf[6, k], buf[7, k]
-                column = lanes_of(0.0, mc00, mc10, 0.0)
-                for j in range(S):
-                    dy = (j - fy) * h1
-                    row = (iy + j) * stride1 - offset
-                    rx = mvx + mc01 * dy
-                    ry = mvy + mc11 * dy
-                    base = lanes_of(m, rx, ry, 0.0)
-                    for i in range(S):
-                        node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        w = wx[i] * wy[j]
-                        dx = (i - fx) * h0
-                        add_to_row(gl, node, w, axpy(dx, column, base))
-    unpack_mass_momentum(grid_mass, grid_mom, lanes)
+    start, inverted = max(lo, 0), 0
+    for k in range(hi - start):
+        p = start + k
+        atx = (x[2 * p + 0] - lower0) * inv_h0
+        ix = min(max(int(atx - 0.5), 0), cells0 - 2)
+        fx = atx - ix
+        wx = _quadratic(fx)
+        aty = (x[2 * p + 1] - lower1) * inv_h1
+        iy = min(max(int(aty - 0.5), 0), cells1 - 2)
+        fy = aty - iy
+        wy = _quadratic(fy)
+        wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
+        vpx = vpy = b00 = b01 = b10 = b11 = 0.0
+        dy = (0 - fy) * h1
+        row = (iy + 0) * stride1 - offset + ix
+        wo = wy[0]
+        sx = sy = tx = ty = 0.0
+        vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
+        sx += wx[0] * vx
+        sy += wx[0] * vy
+        tx += wdx[0] * vx
+        ty += wdx[0] * vy
+        vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
+        sx += wx[1] * vx
+        sy += wx[1] * vy
+        tx += wdx[1] * vx
+        ty += wdx[1] * vy
+        vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
+        sx += wx[2] * vx
+        sy += wx[2] * vy
+        tx += wdx[2] * vx
+        ty += wdx[2] * vy
+        vpx += wo * sx
+        vpy += wo * sy
+        b00 += wo * tx
+        b10 += wo * ty
+        b01 += (wo * dy) * sx
+        b11 += (wo * dy) * sy
+        dy = (1 - fy) * h1
+        row = (iy + 1) * stride1 - offset + ix
+        wo = wy[1]
+        sx = sy = tx = ty = 0.0
+        vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
+        sx += wx[0] * vx
+        sy += wx[0] * vy
+        tx += wdx[0] * vx
+        ty += wdx[0] * vy
+        vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
+        sx += wx[1] * vx
+        sy += wx[1] * vy
+        tx += wdx[1] * vx
+        ty += wdx[1] * vy
+        vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
+        sx += wx[2] * vx
+        sy += wx[2] * vy
+        tx += wdx[2] * vx
+        ty += wdx[2] * vy
+        vpx += wo * sx
+        vpy += wo * sy
+        b00 += wo * tx
+        b10 += wo * ty
+        b01 += (wo * dy) * sx
+        b11 += (wo * dy) * sy
+        dy = (2 - fy) * h1
+        row = (iy + 2) * stride1 - offset + ix
+        wo = wy[2]
+        sx = sy = tx = ty = 0.0
+        vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
+        sx += wx[0] * vx
+        sy += wx[0] * vy
+        tx += wdx[0] * vx
+        ty += wdx[0] * vy
+        vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
+        sx += wx[1] * vx
+        sy += wx[1] * vy
+        tx += wdx[1] * vx
+        ty += wdx[1] * vy
+        vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
+        sx += wx[2] * vx
+        sy += wx[2] * vy
+        tx += wdx[2] * vx
+        ty += wdx[2] * vy
+        vpx += wo * sx
+        vpy += wo * sy
+        b00 += wo * tx
+        b10 += wo * ty
+        b01 += (wo * dy) * sx
+        b11 += (wo * dy) * sy
+        v[2 * p + 0] = vpx
+        v[2 * p + 1] = vpy
+        C[4 * p + 0] = b00 * d_inv0
+        C[4 * p + 1] = b01 * d_inv1
+        C[4 * p + 2] = b10 * d_inv0
+        C[4 * p + 3] = b11 * d_inv1
+        x[2 * p + 0] += dt * vpx
+        x[2 * p + 1] += dt * vpy
+        l00, l01 = b00 * d_inv0, b01 * d_inv1
+        l10, l11 = b10 * d_inv0, b11 * d_inv1
+        f00 = F[4 * p + 0]
+        f01 = F[4 * p + 1]
+        f10 = F[4 * p + 2]
+        f11 = F[4 * p + 3]
+        n00 = f00 + dt * l00 * f00 + dt * l01 * f10
+        n01 = f01 + dt * l00 * f01 + dt * l01 * f11
+        n10 = f10 + dt * l10 * f00 + dt * l11 * f10
+        n11 = f11 + dt * l10 * f01 + dt * l11 * f11
+        F[4 * p + 0] = n00
+        F[4 * p + 1] = n01
+        F[4 * p + 2] = n10
+        F[4 * p + 3] = n11
+        J = n00 * n11 - n01 * n10
+        volume[p] = J * volume0[p]
+        inverted += J <= 0.0
+    bad[t] = -1
+    if inverted:   # (rare)
+        bad[t] = start
+        for p in range(start, hi):
+            if F[4 * p + 0] * F[4 * p + 3] - F[4 * p + 1] * F[4 * p + 2] <= 0.0:
+                bad[t] = p
+                break
 
 
 @njit(parallel=True, cache=True)
@@ -546,134 +713,143 @@ def g2p_mls(x, v, C, F, v_new, volume, volume0, lower, h, inv_h, cells, strides,
     """USL with MLS: v_p, C_p = B_p D_p^-1, x_p += dt v_p, F_p and V_p, as `g2p` with l_is_c
     (the same bits), on flat views: x, v and the nodes' v_new dim entries a row, C and F dim^2.
     bad[t]: first particle of block t whose J = det F is not positive."""
+    bounds = block_bounds(volume.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _g2p_mls_block(np.int64(t), bounds[t], bounds[t + 1], x, v, C, F, v_new, volume, volume0, lower, h,
+                inv_h, cells, strides, offset, d_inv, dt, threads, bad)
+
+
+@njit(cache=True, loop_body=True)
+def _g2p_kinematics_block(t, lo, hi, support, x, rate, L, F, v_new, volume, volume0, lower, h, inv_h, cells, strides, offset,
+                   dt, threads, bad):
+    """Thread t's block of `g2p_kinematics`: particles lo to hi."""
     h0, h1 = h[0], h[1]
     stride1 = strides[1]
     lower0, lower1 = lower[0], lower[1]
     inv_h0, inv_h1 = inv_h[0], inv_h[1]
     cells0, cells1 = cells[0], cells[1]
-    d_inv0, d_inv1 = d_inv[0], d_inv[1]
-    bounds = block_bounds(volume.shape[0], threads)
-    for t in prange(threads):
-        start, inverted = max(bounds[t], 0), 0
-        for k in range(bounds[t + 1] - start):
-            p = start + k
-            atx = (x[2 * p + 0] - lower0) * inv_h0
+    S = support.ndim - 1   # a compile-time constant
+    start, inverted = max(lo, 0), 0
+    for k in range(hi - start):
+        p = start + k
+        atx = (x[2 * p + 0] - lower0) * inv_h0
+        if S == 2:
+            ix = min(int(atx), cells0 - 1)
+            fx = atx - ix
+            wx0, wx1, wx2 = 1.0 - fx, fx, 0.0
+            gx0, gx1, gx2 = -inv_h0, inv_h0, 0.0
+        else:
             ix = min(max(int(atx - 0.5), 0), cells0 - 2)
             fx = atx - ix
-            wx = _quadratic(fx)
-            aty = (x[2 * p + 1] - lower1) * inv_h1
+            wx0, wx1, wx2 = _quadratic(fx)
+            gx0, gx1, gx2 = (-(1.5 - fx) * inv_h0, -2.0 * (fx - 1.0) * inv_h0, (fx - 0.5) * inv_h0)
+        aty = (x[2 * p + 1] - lower1) * inv_h1
+        if S == 2:
+            iy = min(int(aty), cells1 - 1)
+            fy = aty - iy
+            wy0, wy1, wy2 = 1.0 - fy, fy, 0.0
+            gy0, gy1, gy2 = -inv_h1, inv_h1, 0.0
+        else:
             iy = min(max(int(aty - 0.5), 0), cells1 - 2)
             fy = aty - iy
-            wy = _quadratic(fy)
-            wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
-            vpx = vpy = b00 = b01 = b10 = b11 = 0.0
-            dy = (0 - fy) * h1
-            row = (iy + 0) * stride1 - offset + ix
-            wo = wy[0]
-            sx = sy = tx = ty = 0.0
-            vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
-            sx += wx[0] * vx
-            sy += wx[0] * vy
-            tx += wdx[0] * vx
-            ty += wdx[0] * vy
-            vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
-            sx += wx[1] * vx
-            sy += wx[1] * vy
-            tx += wdx[1] * vx
-            ty += wdx[1] * vy
+            wy0, wy1, wy2 = _quadratic(fy)
+            gy0, gy1, gy2 = (-(1.5 - fy) * inv_h1, -2.0 * (fy - 1.0) * inv_h1, (fy - 0.5) * inv_h1)
+        l00 = l01 = l10 = l11 = 0.0
+        row = (iy + 0) * stride1 - offset + ix
+        sx = sy = ux = uy = 0.0
+        vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
+        sx += wx0 * vx
+        sy += wx0 * vy
+        ux += gx0 * vx
+        uy += gx0 * vy
+        vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
+        sx += wx1 * vx
+        sy += wx1 * vy
+        ux += gx1 * vx
+        uy += gx1 * vy
+        if S == 3:
             vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
-            sx += wx[2] * vx
-            sy += wx[2] * vy
-            tx += wdx[2] * vx
-            ty += wdx[2] * vy
-            vpx += wo * sx
-            vpy += wo * sy
-            b00 += wo * tx
-            b10 += wo * ty
-            b01 += (wo * dy) * sx
-            b11 += (wo * dy) * sy
-            dy = (1 - fy) * h1
-            row = (iy + 1) * stride1 - offset + ix
-            wo = wy[1]
-            sx = sy = tx = ty = 0.0
-            vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
-            sx += wx[0] * vx
-            sy += wx[0] * vy
-            tx += wdx[0] * vx
-            ty += wdx[0] * vy
-            vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
-            sx += wx[1] * vx
-            sy += wx[1] * vy
-            tx += wdx[1] * vx
-            ty += wdx[1] * vy
+            sx += wx2 * vx
+            sy += wx2 * vy
+            ux += gx2 * vx
+            uy += gx2 * vy
+        l00 += wy0 * ux
+        l10 += wy0 * uy
+        l01 += gy0 * sx
+        l11 += gy0 * sy
+        row = (iy + 1) * stride1 - offset + ix
+        sx = sy = ux = uy = 0.0
+        vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
+        sx += wx0 * vx
+        sy += wx0 * vy
+        ux += gx0 * vx
+        uy += gx0 * vy
+        vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
+        sx += wx1 * vx
+        sy += wx1 * vy
+        ux += gx1 * vx
+        uy += gx1 * vy
+        if S == 3:
             vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
-            sx += wx[2] * vx
-            sy += wx[2] * vy
-            tx += wdx[2] * vx
-            ty += wdx[2] * vy
-            vpx += wo * sx
-            vpy += wo * sy
-            b00 += wo * tx
-            b10 += wo * ty
-            b01 += (wo * dy) * sx
-            b11 += (wo * dy) * sy
-            dy = (2 - fy) * h1
+            sx += wx2 * vx
+            sy += wx2 * vy
+            ux += gx2 * vx
+            uy += gx2 * vy
+        l00 += wy1 * ux
+        l10 += wy1 * uy
+        l01 += gy1 * sx
+        l11 += gy1 * sy
+        if S == 3:
             row = (iy + 2) * stride1 - offset + ix
-            wo = wy[2]
-            sx = sy = tx = ty = 0.0
+            sx = sy = ux = uy = 0.0
             vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
-            sx += wx[0] * vx
-            sy += wx[0] * vy
-            tx += wdx[0] * vx
-            ty += wdx[0] * vy
+            sx += wx0 * vx
+            sy += wx0 * vy
+            ux += gx0 * vx
+            uy += gx0 * vy
             vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
-            sx += wx[1] * vx
-            sy += wx[1] * vy
-            tx += wdx[1] * vx
-            ty += wdx[1] * vy
-            vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
-            sx += wx[2] * vx
-            sy += wx[2] * vy
-            tx += wdx[2] * vx
-            ty += wdx[2] * vy
-            vpx += wo * sx
-            vpy += wo * sy
-            b00 += wo * tx
-            b10 += wo * ty
-            b01 += (wo * dy) * sx
-            b11 += (wo * dy) * sy
-            v[2 * p + 0] = vpx
-            v[2 * p + 1] = vpy
-            C[4 * p + 0] = b00 * d_inv0
-            C[4 * p + 1] = b01 * d_inv1
-            C[4 * p + 2] = b10 * d_inv0
-            C[4 * p + 3] = b11 * d_inv1
-            x[2 * p + 0] += dt * vpx
-            x[2 * p + 1] += dt * vpy
-            l00, l01 = b00 * d_inv0, b01 * d_inv1
-            l10, l11 = b10 * d_inv0, b11 * d_inv1
-            f00 = F[4 * p + 0]
-            f01 = F[4 * p + 1]
-            f10 = F[4 * p + 2]
-            f11 = F[4 * p + 3]
-            n00 = f00 + dt * l00 * f00 + dt * l01 * f10
-            n01 = f01 + dt * l00 * f01 + dt * l01 * f11
-            n10 = f10 + dt * l10 * f00 + dt * l11 * f10
-            n11 = f11 + dt * l10 * f01 + dt * l11 * f11
-            F[4 * p + 0] = n00
-            F[4 * p + 1] = n01
-            F[4 * p + 2] = n10
-            F[4 * p + 3] = n11
-            J = n00 * n11 - n01 * n10
-            volume[p] = J * volume0[p]
-            inverted += J <= 0.0
-        bad[t] = -1
-        if inverted:   # (rare) the first such particle, J formed as the loop formed it
-            bad[t] = start   # (were it not found, the block would still fail)
-            for p in range(start, bounds[t + 1]):
-                if F[4 * p + 0] * F[4 * p + 3] - F[4 * p + 1] * F[4 * p + 2] <= 0.0:
-                    bad[t] = p
-                    break
+            sx += wx1 * vx
+            sy += wx1 * vy
+            ux += gx1 * vx
+            uy += gx1 * vy
+            if S == 3:
+                vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
+                sx += wx2 * vx
+                sy += wx2 * vy
+                ux += gx2 * vx
+                uy += gx2 * vy
+            l00 += wy2 * ux
+            l10 += wy2 * uy
+            l01 += gy2 * sx
+            l11 += gy2 * sy
+        x[2 * p + 0] += dt * rate[2 * p + 0]
+        x[2 * p + 1] += dt * rate[2 * p + 1]
+        L[4 * p + 0] = l00
+        L[4 * p + 1] = l01
+        L[4 * p + 2] = l10
+        L[4 * p + 3] = l11
+        f00 = F[4 * p + 0]
+        f01 = F[4 * p + 1]
+        f10 = F[4 * p + 2]
+        f11 = F[4 * p + 3]
+        n00 = f00 + dt * l00 * f00 + dt * l01 * f10
+        n01 = f01 + dt * l00 * f01 + dt * l01 * f11
+        n10 = f10 + dt * l10 * f00 + dt * l11 * f10
+        n11 = f11 + dt * l10 * f01 + dt * l11 * f11
+        F[4 * p + 0] = n00
+        F[4 * p + 1] = n01
+        F[4 * p + 2] = n10
+        F[4 * p + 3] = n11
+        J = n00 * n11 - n01 * n10
+        volume[p] = J * volume0[p]
+        inverted += J <= 0.0
+    bad[t] = -1
+    if inverted:   # (rare)
+        bad[t] = start
+        for p in range(start, hi):
+            if F[4 * p + 0] * F[4 * p + 3] - F[4 * p + 1] * F[4 * p + 2] <= 0.0:
+                bad[t] = p
+                break
 
 
 @njit(parallel=True, cache=True)
@@ -683,132 +859,7 @@ def g2p_kinematics(support, x, rate, L, F, v_new, volume, volume0, lower, h, inv
     on flat views: x, rate and the nodes' v_new dim entries a row, L and F dim^2. support: the
     compile-time constant S (2: linear hats, 3: quadratic B-splines) as `g2p`'s variant has it.
     bad[t]: first particle of block t whose J = det F is not positive."""
-    h0, h1 = h[0], h[1]
-    stride1 = strides[1]
-    lower0, lower1 = lower[0], lower[1]
-    inv_h0, inv_h1 = inv_h[0], inv_h[1]
-    cells0, cells1 = cells[0], cells[1]
     bounds = block_bounds(volume.shape[0], threads)
-    for t in prange(threads):
-        S = support.ndim - 1   # a compile-time constant
-        start, inverted = max(bounds[t], 0), 0
-        for k in range(bounds[t + 1] - start):
-            p = start + k
-            atx = (x[2 * p + 0] - lower0) * inv_h0
-            if S == 2:
-                ix = min(int(atx), cells0 - 1)
-                fx = atx - ix
-                wx0, wx1, wx2 = 1.0 - fx, fx, 0.0
-                gx0, gx1, gx2 = -inv_h0, inv_h0, 0.0
-            else:
-                ix = min(max(int(atx - 0.5), 0), cells0 - 2)
-                fx = atx - ix
-                wx0, wx1, wx2 = _quadratic(fx)
-                gx0, gx1, gx2 = (-(1.5 - fx) * inv_h0, -2.0 * (fx - 1.0) * inv_h0, (fx - 0.5) * inv_h0)
-            aty = (x[2 * p + 1] - lower1) * inv_h1
-            if S == 2:
-                iy = min(int(aty), cells1 - 1)
-                fy = aty - iy
-                wy0, wy1, wy2 = 1.0 - fy, fy, 0.0
-                gy0, gy1, gy2 = -inv_h1, inv_h1, 0.0
-            else:
-                iy = min(max(int(aty - 0.5), 0), cells1 - 2)
-                fy = aty - iy
-                wy0, wy1, wy2 = _quadratic(fy)
-                gy0, gy1, gy2 = (-(1.5 - fy) * inv_h1, -2.0 * (fy - 1.0) * inv_h1, (fy - 0.5) * inv_h1)
-            l00 = l01 = l10 = l11 = 0.0
-            row = (iy + 0) * stride1 - offset + ix
-            sx = sy = ux = uy = 0.0
-            vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
-            sx += wx0 * vx
-            sy += wx0 * vy
-            ux += gx0 * vx
-            uy += gx0 * vy
-            vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
-            sx += wx1 * vx
-            sy += wx1 * vy
-            ux += gx1 * vx
-            uy += gx1 * vy
-            if S == 3:
-                vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
-                sx += wx2 * vx
-                sy += wx2 * vy
-                ux += gx2 * vx
-                uy += gx2 * vy
-            l00 += wy0 * ux
-            l10 += wy0 * uy
-            l01 += gy0 * sx
-            l11 += gy0 * sy
-            row = (iy + 1) * stride1 - offset + ix
-            sx = sy = ux = uy = 0.0
-            vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
-            sx += wx0 * vx
-            sy += wx0 * vy
-            ux += gx0 * vx
-            uy += gx0 * vy
-            vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
-            sx += wx1 * vx
-            sy += wx1 * vy
-            ux += gx1 * vx
-            uy += gx1 * vy
-            if S == 3:
-                vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
-                sx += wx2 * vx
-                sy += wx2 * vy
-                ux += gx2 * vx
-                uy += gx2 * vy
-            l00 += wy1 * ux
-            l10 += wy1 * uy
-            l01 += gy1 * sx
-            l11 += gy1 * sy
-            if S == 3:
-                row = (iy + 2) * stride1 - offset + ix
-                sx = sy = ux = uy = 0.0
-                vx, vy = v_new[2 * (row + 0) + 0], v_new[2 * (row + 0) + 1]
-                sx += wx0 * vx
-                sy += wx0 * vy
-                ux += gx0 * vx
-                uy += gx0 * vy
-                vx, vy = v_new[2 * (row + 1) + 0], v_new[2 * (row + 1) + 1]
-                sx += wx1 * vx
-                sy += wx1 * vy
-                ux += gx1 * vx
-                uy += gx1 * vy
-                if S == 3:
-                    vx, vy = v_new[2 * (row + 2) + 0], v_new[2 * (row + 2) + 1]
-                    sx += wx2 * vx
-                    sy += wx2 * vy
-                    ux += gx2 * vx
-                    uy += gx2 * vy
-                l00 += wy2 * ux
-                l10 += wy2 * uy
-                l01 += gy2 * sx
-                l11 += gy2 * sy
-            x[2 * p + 0] += dt * rate[2 * p + 0]
-            x[2 * p + 1] += dt * rate[2 * p + 1]
-            L[4 * p + 0] = l00
-            L[4 * p + 1] = l01
-            L[4 * p + 2] = l10
-            L[4 * p + 3] = l11
-            f00 = F[4 * p + 0]
-            f01 = F[4 * p + 1]
-            f10 = F[4 * p + 2]
-            f11 = F[4 * p + 3]
-            n00 = f00 + dt * l00 * f00 + dt * l01 * f10
-            n01 = f01 + dt * l00 * f01 + dt * l01 * f11
-            n10 = f10 + dt * l10 * f00 + dt * l11 * f10
-            n11 = f11 + dt * l10 * f01 + dt * l11 * f11
-            F[4 * p + 0] = n00
-            F[4 * p + 1] = n01
-            F[4 * p + 2] = n10
-            F[4 * p + 3] = n11
-            J = n00 * n11 - n01 * n10
-            volume[p] = J * volume0[p]
-            inverted += J <= 0.0
-        bad[t] = -1
-        if inverted:   # (rare) the first such particle, J formed as the loop formed it
-            bad[t] = start
-            for p in range(start, bounds[t + 1]):
-                if F[4 * p + 0] * F[4 * p + 3] - F[4 * p + 1] * F[4 * p + 2] <= 0.0:
-                    bad[t] = p
-                    break
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _g2p_kinematics_block(np.int64(t), bounds[t], bounds[t + 1], support, x, rate, L, F, v_new, volume,
+                volume0, lower, h, inv_h, cells, strides, offset, dt, threads, bad)

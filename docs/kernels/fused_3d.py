@@ -11,6 +11,146 @@ from solver.lanes import exact as _lane_operations
 axpy, add_to_row = _lane_operations.axpy, _lane_operations.add_to_row
 
 
+@njit(cache=True, loop_body=True)
+def _p2g_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
+        grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad, dt):
+    """Thread t's block of `p2g`: particles lo to hi."""
+    support, affine_, loaded_, mls_, fold_, inline_ = variant
+    lower, h, inv_h, cells, strides, offset = frame
+    h0, h1, h2 = h[0], h[1], h[2]
+    stride1 = strides[1]
+    stride2 = strides[2]
+    d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]
+    shared_acc = acc.shape[0] == 1
+    S, affine, loaded, mls = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2, mls_.ndim == 2   # compile-time constants
+    fold, inline = fold_.ndim == 2, inline_.ndim == 2
+    gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)
+    gf = grid_force if fold else own(t, grid_force, copies_force)
+    bad[t] = -1
+    for p in range(np.uint64(lo), np.uint64(hi)):
+        sig00, sig01, sig02 = stress[p, 0, 0], stress[p, 0, 1], stress[p, 0, 2]
+        sig10, sig11, sig12 = stress[p, 1, 0], stress[p, 1, 1], stress[p, 1, 2]
+        sig20, sig21, sig22 = stress[p, 2, 0], stress[p, 2, 1], stress[p, 2, 2]
+        okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+        oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+        okz, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
+        if not (okx and oky and okz):      # (no break: an early exit slows the whole loop)
+            if bad[t] < 0:
+                bad[t] = p
+            continue
+        m = mass[p]
+        ap = np.uint64(0) if shared_acc else p
+        mbx, mby, mbz = m * acc[ap, 0], m * acc[ap, 1], m * acc[ap, 2]
+        mvx, mvy, mvz = m * v[p, 0], m * v[p, 1], m * v[p, 2]
+        vol = volume[p]
+        if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w
+            if loaded:   # (without a body force dt m b is +0: adding it would change no sum)
+                mvx += dt * mbx
+                mvy += dt * mby
+                mvz += dt * mbz
+            if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)
+                s00, s01, s02 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1), dt * (vol * sig02 * d_inv2)
+                s10, s11, s12 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1), dt * (vol * sig12 * d_inv2)
+                s20, s21, s22 = dt * (vol * sig20 * d_inv0), dt * (vol * sig21 * d_inv1), dt * (vol * sig22 * d_inv2)
+            else:
+                s00, s01, s02 = dt * (vol * sig00), dt * (vol * sig01), dt * (vol * sig02)
+                s10, s11, s12 = dt * (vol * sig10), dt * (vol * sig11), dt * (vol * sig12)
+                s20, s21, s22 = dt * (vol * sig20), dt * (vol * sig21), dt * (vol * sig22)
+        elif mls:
+            s00, s01, s02 = vol * sig00 * d_inv0, vol * sig01 * d_inv1, vol * sig02 * d_inv2
+            s10, s11, s12 = vol * sig10 * d_inv0, vol * sig11 * d_inv1, vol * sig12 * d_inv2
+            s20, s21, s22 = vol * sig20 * d_inv0, vol * sig21 * d_inv1, vol * sig22 * d_inv2
+        else:
+            s00, s01, s02 = vol * sig00, vol * sig01, vol * sig02
+            s10, s11, s12 = vol * sig10, vol * sig11, vol * sig12
+            s20, s21, s22 = vol * sig20, vol * sig21, vol * sig22
+        mc00 = mc01 = mc02 = mc10 = mc11 = mc12 = mc20 = mc21 = mc22 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
+        if affine:
+            mc00, mc01, mc02 = m * C[p, 0, 0], m * C[p, 0, 1], m * C[p, 0, 2]
+            mc10, mc11, mc12 = m * C[p, 1, 0], m * C[p, 1, 1], m * C[p, 1, 2]
+            mc20, mc21, mc22 = m * C[p, 2, 0], m * C[p, 2, 1], m * C[p, 2, 2]
+        if fold and mls:
+            mc00, mc01, mc02 = mc00 - s00, mc01 - s01, mc02 - s02
+            mc10, mc11, mc12 = mc10 - s10, mc11 - s11, mc12 - s12
+            mc20, mc21, mc22 = mc20 - s20, mc21 - s21, mc22 - s22
+        if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum
+            wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
+        for k in range(S):
+            dz = (k - fz) * h2
+            for j in range(S):
+                dy = (j - fy) * h1
+                row = (iy + j) * stride1 + (iz + k) * stride2 - offset
+                wo = wy[j] * wz[k]
+                go1 = gy[j] * wz[k]
+                go2 = wy[j] * gz[k]
+                rx = mvx + mc01 * dy + mc02 * dz
+                ry = mvy + mc11 * dy + mc12 * dz
+                rz = mvz + mc21 * dy + mc22 * dz
+                fgx = s00 * wo
+                fox = s01 * go1 + s02 * go2
+                fwx = mbx * wo - fox
+                fgy = s10 * wo
+                foy = s11 * go1 + s12 * go2
+                fwy = mby * wo - foy
+                fgz = s20 * wo
+                foz = s21 * go1 + s22 * go2
+                fwz = mbz * wo - foz
+                if fold and not mls:
+                    qax = wo * rx - fox
+                    qbx = wo * mc00
+                    qay = wo * ry - foy
+                    qby = wo * mc10
+                    qaz = wo * rz - foz
+                    qbz = wo * mc20
+                for i in range(S):
+                    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                    w = wx[i] * wo
+                    if affine:
+                        dx = (i - fx) * h0
+                    if fold:
+                        pass
+                    elif mls:   # w (x_I - x_p); D_p^-1 is in s (the MLS gradient, solver/transfer.py)
+                        dwx = w * dx
+                        dwy = w * dy
+                        dwz = w * dz
+                    else:
+                        dwx = gx[i] * wo
+                        dwy = wx[i] * go1
+                        dwz = wx[i] * go2
+                    px, py, pz = mvx, mvy, mvz
+                    if affine:
+                        px = rx + mc00 * dx
+                        py = ry + mc10 * dx
+                        pz = rz + mc20 * dx
+                    gm[node] += w * m
+                    if fold and not mls:   # w (m v + dt m b + m C (x_I - x_p)) - dt V sigma grad w (`_p2g_row`)
+                        gp[node, 0] += wx[i] * qax + wdx[i] * qbx - gx[i] * fgx
+                        gp[node, 1] += wx[i] * qay + wdx[i] * qby - gx[i] * fgy
+                        gp[node, 2] += wx[i] * qaz + wdx[i] * qbz - gx[i] * fgz
+                    else:
+                        gp[node, 0] += w * px
+                        gp[node, 1] += w * py
+                        gp[node, 2] += w * pz
+                    if fold:
+                        pass
+                    elif mls and loaded:
+                        gf[node, 0] += w * mbx - s00 * dwx - s01 * dwy - s02 * dwz
+                        gf[node, 1] += w * mby - s10 * dwx - s11 * dwy - s12 * dwz
+                        gf[node, 2] += w * mbz - s20 * dwx - s21 * dwy - s22 * dwz
+                    elif mls:
+                        gf[node, 0] -= s00 * dwx + s01 * dwy + s02 * dwz
+                        gf[node, 1] -= s10 * dwx + s11 * dwy + s12 * dwz
+                        gf[node, 2] -= s20 * dwx + s21 * dwy + s22 * dwz
+                    elif loaded:   # w mb - sigma grad w, its row factors taken once (`_p2g_row`)
+                        gf[node, 0] += wx[i] * fwx - gx[i] * fgx
+                        gf[node, 1] += wx[i] * fwy - gx[i] * fgy
+                        gf[node, 2] += wx[i] * fwz - gx[i] * fgz
+                    else:
+                        gf[node, 0] -= wx[i] * fox + gx[i] * fgx
+                        gf[node, 1] -= wx[i] * foy + gx[i] * fgy
+                        gf[node, 2] -= wx[i] * foz + gx[i] * fgz
+
+
 @njit(parallel=True, cache=True)
 def p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
         grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force, bad, dt):
@@ -23,147 +163,168 @@ def p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, fr
     cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS); copies_*: the nodal arrays of
     the other threads. `inline`: sigma_p is formed from F, L, V, V0 and the material's
     parameters `material` (where the module has a material's lines), not read from `stress`."""
-    support, affine_, loaded_, mls_, fold_, inline_ = variant
+    threads = copies_mass.shape[0] + 1
+    bounds = block_bounds(x.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _p2g_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, volume, stress, F, L, volume0,
+                material, acc, frame, d_inv, grid_mass, grid_mom, grid_force, copies_mass, copies_mom,
+                copies_force, bad, dt)
+    if variant[4].ndim == 2:   # (fold_)
+        _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+    else:
+        _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+
+
+@njit(cache=True, loop_body=True)
+def _g2p_block(t, lo, hi, variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new, grid_mom,
+        flip, dt, d_inv, copies_mom, stress, material, bad):
+    """Thread t's block of `g2p`: particles lo to hi."""
+    support, mode_, affine_, blend_, mls_, l_is_c_, updates_ = variant
     lower, h, inv_h, cells, strides, offset = frame
     h0, h1, h2 = h[0], h[1], h[2]
     stride1 = strides[1]
     stride2 = strides[2]
     d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]
-    threads = copies_mass.shape[0] + 1
-    shared_acc = acc.shape[0] == 1
-    bounds = block_bounds(x.shape[0], threads)
-    for t in prange(threads):
-        S, affine, loaded, mls = support.ndim - 1, affine_.ndim == 2, loaded_.ndim == 2, mls_.ndim == 2   # compile-time constants
-        fold, inline = fold_.ndim == 2, inline_.ndim == 2
-        gm, gp = own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom)
-        gf = grid_force if fold else own(t, grid_force, copies_force)
-        bad[t] = -1
-        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
-            sig00, sig01, sig02 = stress[p, 0, 0], stress[p, 0, 1], stress[p, 0, 2]
-            sig10, sig11, sig12 = stress[p, 1, 0], stress[p, 1, 1], stress[p, 1, 2]
-            sig20, sig21, sig22 = stress[p, 2, 0], stress[p, 2, 1], stress[p, 2, 2]
-            okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            okz, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
-            if not (okx and oky and okz):      # (no break: an early exit slows the whole loop)
-                if bad[t] < 0:
-                    bad[t] = p
-                continue
-            m = mass[p]
-            ap = np.uint64(0) if shared_acc else p
-            mbx, mby, mbz = m * acc[ap, 0], m * acc[ap, 1], m * acc[ap, 2]
-            mvx, mvy, mvz = m * v[p, 0], m * v[p, 1], m * v[p, 2]
-            vol = volume[p]
-            if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w
-                if loaded:   # (without a body force dt m b is +0: adding it would change no sum)
-                    mvx += dt * mbx
-                    mvy += dt * mby
-                    mvz += dt * mbz
-                if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)
-                    s00, s01, s02 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1), dt * (vol * sig02 * d_inv2)
-                    s10, s11, s12 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1), dt * (vol * sig12 * d_inv2)
-                    s20, s21, s22 = dt * (vol * sig20 * d_inv0), dt * (vol * sig21 * d_inv1), dt * (vol * sig22 * d_inv2)
-                else:
-                    s00, s01, s02 = dt * (vol * sig00), dt * (vol * sig01), dt * (vol * sig02)
-                    s10, s11, s12 = dt * (vol * sig10), dt * (vol * sig11), dt * (vol * sig12)
-                    s20, s21, s22 = dt * (vol * sig20), dt * (vol * sig21), dt * (vol * sig22)
-            elif mls:
-                s00, s01, s02 = vol * sig00 * d_inv0, vol * sig01 * d_inv1, vol * sig02 * d_inv2
-                s10, s11, s12 = vol * sig10 * d_inv0, vol * sig11 * d_inv1, vol * sig12 * d_inv2
-                s20, s21, s22 = vol * sig20 * d_inv0, vol * sig21 * d_inv1, vol * sig22 * d_inv2
+    S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2   # compile-time constants
+    mode, l_is_c, updates = mode_.ndim - 1, l_is_c_.ndim == 2, updates_.ndim == 2
+    gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom
+    bad[t] = -1
+    for p in range(np.uint64(lo), np.uint64(hi)):
+        _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+        _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+        _, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
+        vpx = vpy = vpz = dvx = dvy = dvz = 0.0
+        b00 = b01 = b02 = b10 = b11 = b12 = b20 = b21 = b22 = 0.0
+        l00 = l01 = l02 = l10 = l11 = l12 = l20 = l21 = l22 = 0.0
+        wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)   # (wx has 3 entries for every support)
+        for k in range(S):
+            dz = (k - fz) * h2
+            for j in range(S):
+                dy = (j - fy) * h1
+                row = (iy + j) * stride1 + (iz + k) * stride2 - offset
+                wo = wy[j] * wz[k]
+                go1 = gy[j] * wz[k]
+                go2 = wy[j] * gz[k]
+                sx = sy = sz = tx = ty = tz = ux = uy = uz = ex = ey = ez = 0.0
+                for i in range(S):
+                    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                    vx, vy, vz = v_new[node, 0], v_new[node, 1], v_new[node, 2]
+                    sx += wx[i] * vx
+                    sy += wx[i] * vy
+                    sz += wx[i] * vz
+                    if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)
+                        tx += wdx[i] * vx
+                        ty += wdx[i] * vy
+                        tz += wdx[i] * vz
+                    if mode != KINEMATICS and blend:
+                        ex += wx[i] * (vx - v_old[node, 0])
+                        ey += wx[i] * (vy - v_old[node, 1])
+                        ez += wx[i] * (vz - v_old[node, 2])
+                    if mode != REMAP and not mls:
+                        ux += gx[i] * vx
+                        uy += gx[i] * vy
+                        uz += gx[i] * vz
+                if mode != KINEMATICS:
+                    vpx += wo * sx
+                    vpy += wo * sy
+                    vpz += wo * sz
+                    if blend:
+                        dvx += wo * ex
+                        dvy += wo * ey
+                        dvz += wo * ez
+                if affine and (mls or mode != KINEMATICS):
+                    b00 += wo * tx
+                    b10 += wo * ty
+                    b20 += wo * tz
+                    b01 += (wo * dy) * sx
+                    b02 += (wo * dz) * sx
+                    b11 += (wo * dy) * sy
+                    b12 += (wo * dz) * sy
+                    b21 += (wo * dy) * sz
+                    b22 += (wo * dz) * sz
+                if mode != REMAP and not mls:
+                    l00 += wo * ux
+                    l10 += wo * uy
+                    l20 += wo * uz
+                    l01 += go1 * sx
+                    l02 += go2 * sx
+                    l11 += go1 * sy
+                    l12 += go2 * sy
+                    l21 += go1 * sz
+                    l22 += go2 * sz
+        if mode != KINEMATICS:
+            if blend:
+                v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
+                v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
+                v[p, 2] = flip * (v[p, 2] + dvz) + (1.0 - flip) * vpz
             else:
-                s00, s01, s02 = vol * sig00, vol * sig01, vol * sig02
-                s10, s11, s12 = vol * sig10, vol * sig11, vol * sig12
-                s20, s21, s22 = vol * sig20, vol * sig21, vol * sig22
-            mc00 = mc01 = mc02 = mc10 = mc11 = mc12 = mc20 = mc21 = mc22 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
+                v[p, 0], v[p, 1], v[p, 2] = vpx, vpy, vpz
             if affine:
-                mc00, mc01, mc02 = m * C[p, 0, 0], m * C[p, 0, 1], m * C[p, 0, 2]
-                mc10, mc11, mc12 = m * C[p, 1, 0], m * C[p, 1, 1], m * C[p, 1, 2]
-                mc20, mc21, mc22 = m * C[p, 2, 0], m * C[p, 2, 1], m * C[p, 2, 2]
-            if fold and mls:
-                mc00, mc01, mc02 = mc00 - s00, mc01 - s01, mc02 - s02
-                mc10, mc11, mc12 = mc10 - s10, mc11 - s11, mc12 - s12
-                mc20, mc21, mc22 = mc20 - s20, mc21 - s21, mc22 - s22
-            if fold and not mls:   # w (x_I - x_p) along x, for the row factors of the folded APIC momentum
-                wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
+                C[p, 0, 0], C[p, 0, 1], C[p, 0, 2] = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
+                C[p, 1, 0], C[p, 1, 1], C[p, 1, 2] = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
+                C[p, 2, 0], C[p, 2, 1], C[p, 2, 2] = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
+        if mode == REMAP:
+            rate[p, 0], rate[p, 1], rate[p, 2] = vpx, vpy, vpz
+            m = mass[p]
+            vrx, vry, vrz = v[p, 0], v[p, 1], v[p, 2]
+            if affine:
+                cr00, cr01, cr02 = C[p, 0, 0], C[p, 0, 1], C[p, 0, 2]
+                cr10, cr11, cr12 = C[p, 1, 0], C[p, 1, 1], C[p, 1, 2]
+                cr20, cr21, cr22 = C[p, 2, 0], C[p, 2, 1], C[p, 2, 2]
             for k in range(S):
                 dz = (k - fz) * h2
                 for j in range(S):
                     dy = (j - fy) * h1
                     row = (iy + j) * stride1 + (iz + k) * stride2 - offset
                     wo = wy[j] * wz[k]
-                    go1 = gy[j] * wz[k]
-                    go2 = wy[j] * gz[k]
-                    rx = mvx + mc01 * dy + mc02 * dz
-                    ry = mvy + mc11 * dy + mc12 * dz
-                    rz = mvz + mc21 * dy + mc22 * dz
-                    fgx = s00 * wo
-                    fox = s01 * go1 + s02 * go2
-                    fwx = mbx * wo - fox
-                    fgy = s10 * wo
-                    foy = s11 * go1 + s12 * go2
-                    fwy = mby * wo - foy
-                    fgz = s20 * wo
-                    foz = s21 * go1 + s22 * go2
-                    fwz = mbz * wo - foz
-                    if fold and not mls:
-                        qax = wo * rx - fox
-                        qbx = wo * mc00
-                        qay = wo * ry - foy
-                        qby = wo * mc10
-                        qaz = wo * rz - foz
-                        qbz = wo * mc20
                     for i in range(S):
                         node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        w = wx[i] * wo
+                        mw = m * (wx[i] * wo)
+                        px, py, pz = vrx, vry, vrz
                         if affine:
                             dx = (i - fx) * h0
-                        if fold:
-                            pass
-                        elif mls:   # w (x_I - x_p); D_p^-1 is in s (the MLS gradient, solver/transfer.py)
-                            dwx = w * dx
-                            dwy = w * dy
-                            dwz = w * dz
-                        else:
-                            dwx = gx[i] * wo
-                            dwy = wx[i] * go1
-                            dwz = wx[i] * go2
-                        px, py, pz = mvx, mvy, mvz
-                        if affine:
-                            px = rx + mc00 * dx
-                            py = ry + mc10 * dx
-                            pz = rz + mc20 * dx
-                        gm[node] += w * m
-                        if fold and not mls:   # w (m v + dt m b + m C (x_I - x_p)) - dt V sigma grad w (`_p2g_row`)
-                            gp[node, 0] += wx[i] * qax + wdx[i] * qbx - gx[i] * fgx
-                            gp[node, 1] += wx[i] * qay + wdx[i] * qby - gx[i] * fgy
-                            gp[node, 2] += wx[i] * qaz + wdx[i] * qbz - gx[i] * fgz
-                        else:
-                            gp[node, 0] += w * px
-                            gp[node, 1] += w * py
-                            gp[node, 2] += w * pz
-                        if fold:
-                            pass
-                        elif mls and loaded:
-                            gf[node, 0] += w * mbx - s00 * dwx - s01 * dwy - s02 * dwz
-                            gf[node, 1] += w * mby - s10 * dwx - s11 * dwy - s12 * dwz
-                            gf[node, 2] += w * mbz - s20 * dwx - s21 * dwy - s22 * dwz
-                        elif mls:
-                            gf[node, 0] -= s00 * dwx + s01 * dwy + s02 * dwz
-                            gf[node, 1] -= s10 * dwx + s11 * dwy + s12 * dwz
-                            gf[node, 2] -= s20 * dwx + s21 * dwy + s22 * dwz
-                        elif loaded:   # w mb - sigma grad w, its row factors taken once (`_p2g_row`)
-                            gf[node, 0] += wx[i] * fwx - gx[i] * fgx
-                            gf[node, 1] += wx[i] * fwy - gx[i] * fgy
-                            gf[node, 2] += wx[i] * fwz - gx[i] * fgz
-                        else:
-                            gf[node, 0] -= wx[i] * fox + gx[i] * fgx
-                            gf[node, 1] -= wx[i] * foy + gx[i] * fgy
-                            gf[node, 2] -= wx[i] * foz + gx[i] * fgz
-    if fold_.ndim == 2:
-        _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
-    else:
-        _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+                            px += cr00 * dx + cr01 * dy + cr02 * dz
+                            py += cr10 * dx + cr11 * dy + cr12 * dz
+                            pz += cr20 * dx + cr21 * dy + cr22 * dz
+                        gp[node, 0] += mw * px
+                        gp[node, 1] += mw * py
+                        gp[node, 2] += mw * pz
+            continue
+        if mode == USL:
+            x[p, 0] += dt * vpx
+            x[p, 1] += dt * vpy
+            x[p, 2] += dt * vpz
+        else:
+            x[p, 0] += dt * rate[p, 0]
+            x[p, 1] += dt * rate[p, 1]
+            x[p, 2] += dt * rate[p, 2]
+        if mls:   # L_p = B_p D_p^-1: C_p itself after a USL gather
+            l00, l01, l02 = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
+            l10, l11, l12 = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
+            l20, l21, l22 = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
+        if not l_is_c:   # (else L_p is left to the particles' deferred update, solver/step/fused.py)
+            L[p, 0, 0], L[p, 0, 1], L[p, 0, 2] = l00, l01, l02
+            L[p, 1, 0], L[p, 1, 1], L[p, 1, 2] = l10, l11, l12
+            L[p, 2, 0], L[p, 2, 1], L[p, 2, 2] = l20, l21, l22
+        f00, f01, f02 = F[p, 0, 0], F[p, 0, 1], F[p, 0, 2]
+        f10, f11, f12 = F[p, 1, 0], F[p, 1, 1], F[p, 1, 2]
+        f20, f21, f22 = F[p, 2, 0], F[p, 2, 1], F[p, 2, 2]
+        n00 = f00 + dt * l00 * f00 + dt * l01 * f10 + dt * l02 * f20
+        n01 = f01 + dt * l00 * f01 + dt * l01 * f11 + dt * l02 * f21
+        n02 = f02 + dt * l00 * f02 + dt * l01 * f12 + dt * l02 * f22
+        n10 = f10 + dt * l10 * f00 + dt * l11 * f10 + dt * l12 * f20
+        n11 = f11 + dt * l10 * f01 + dt * l11 * f11 + dt * l12 * f21
+        n12 = f12 + dt * l10 * f02 + dt * l11 * f12 + dt * l12 * f22
+        n20 = f20 + dt * l20 * f00 + dt * l21 * f10 + dt * l22 * f20
+        n21 = f21 + dt * l20 * f01 + dt * l21 * f11 + dt * l22 * f21
+        n22 = f22 + dt * l20 * f02 + dt * l21 * f12 + dt * l22 * f22
+        F[p, 0, 0], F[p, 0, 1], F[p, 0, 2] = n00, n01, n02
+        F[p, 1, 0], F[p, 1, 1], F[p, 1, 2] = n10, n11, n12
+        F[p, 2, 0], F[p, 2, 1], F[p, 2, 2] = n20, n21, n22
+        J = n00 * (n11 * n22 - n12 * n21) - n01 * (n10 * n22 - n12 * n20) + n02 * (n10 * n21 - n11 * n20)
+        volume[p] = J * volume0[p]
+        if J <= 0.0 and bad[t] < 0:
+            bad[t] = p
 
 
 @njit(parallel=True, cache=True)
@@ -179,158 +340,94 @@ def g2p(variant, x, v, C, mass, L, F, volume, volume0, rate, frame, v_old, v_new
     inv_h, cells, strides, offset); d_inv: D_p^-1 per axis (APIC, MLS). `l_is_c` (MLS, USL): L_p,
     which is C_p, is not written. `updates` (USL, KINEMATICS; where the module has a material's
     update lines): `stress` is updated from L_p with the parameters `material`."""
-    support, mode_, affine_, blend_, mls_, l_is_c_, updates_ = variant
+    threads = copies_mom.shape[0] + 1
+    remaps = variant[1].ndim - 1 == REMAP   # (mode_)
+    bounds = block_bounds(x.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _g2p_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, L, F, volume, volume0, rate,
+                frame, v_old, v_new, grid_mom, flip, dt, d_inv, copies_mom, stress, material, bad)
+    if remaps and copies_mom.shape[0] > 0:
+        add_node_copies(grid_mom, copies_mom)
+
+
+@njit(cache=True, loop_body=True)
+def _p2g_lanes_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
+        grid_mass, grid_mom, lanes, bad, dt):
+    """Thread t's block of `p2g_lanes`: particles lo to hi."""
+    support, affine_, loaded_, mls_, fold_, inline_ = variant
     lower, h, inv_h, cells, strides, offset = frame
     h0, h1, h2 = h[0], h[1], h[2]
     stride1 = strides[1]
     stride2 = strides[2]
-    threads = copies_mom.shape[0] + 1
-    remaps = mode_.ndim - 1 == REMAP
     d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]
-    bounds = block_bounds(x.shape[0], threads)
-    for t in prange(threads):
-        S, affine, blend, mls = support.ndim - 1, affine_.ndim == 2, blend_.ndim == 2, mls_.ndim == 2   # compile-time constants
-        mode, l_is_c, updates = mode_.ndim - 1, l_is_c_.ndim == 2, updates_.ndim == 2
-        gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom
-        bad[t] = -1
-        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
-            _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            _, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
-            vpx = vpy = vpz = dvx = dvy = dvz = 0.0
-            b00 = b01 = b02 = b10 = b11 = b12 = b20 = b21 = b22 = 0.0
-            l00 = l01 = l02 = l10 = l11 = l12 = l20 = l21 = l22 = 0.0
-            wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)   # (wx has 3 entries for every support)
-            for k in range(S):
-                dz = (k - fz) * h2
-                for j in range(S):
-                    dy = (j - fy) * h1
-                    row = (iy + j) * stride1 + (iz + k) * stride2 - offset
-                    wo = wy[j] * wz[k]
-                    go1 = gy[j] * wz[k]
-                    go2 = wy[j] * gz[k]
-                    sx = sy = sz = tx = ty = tz = ux = uy = uz = ex = ey = ez = 0.0
-                    for i in range(S):
-                        node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        vx, vy, vz = v_new[node, 0], v_new[node, 1], v_new[node, 2]
-                        sx += wx[i] * vx
-                        sy += wx[i] * vy
-                        sz += wx[i] * vz
-                        if affine and (mls or mode != KINEMATICS):   # B_p (MLS: also the L_p of the remapped velocity)
-                            tx += wdx[i] * vx
-                            ty += wdx[i] * vy
-                            tz += wdx[i] * vz
-                        if mode != KINEMATICS and blend:
-                            ex += wx[i] * (vx - v_old[node, 0])
-                            ey += wx[i] * (vy - v_old[node, 1])
-                            ez += wx[i] * (vz - v_old[node, 2])
-                        if mode != REMAP and not mls:
-                            ux += gx[i] * vx
-                            uy += gx[i] * vy
-                            uz += gx[i] * vz
-                    if mode != KINEMATICS:
-                        vpx += wo * sx
-                        vpy += wo * sy
-                        vpz += wo * sz
-                        if blend:
-                            dvx += wo * ex
-                            dvy += wo * ey
-                            dvz += wo * ez
-                    if affine and (mls or mode != KINEMATICS):
-                        b00 += wo * tx
-                        b10 += wo * ty
-                        b20 += wo * tz
-                        b01 += (wo * dy) * sx
-                        b02 += (wo * dz) * sx
-                        b11 += (wo * dy) * sy
-                        b12 += (wo * dz) * sy
-                        b21 += (wo * dy) * sz
-                        b22 += (wo * dz) * sz
-                    if mode != REMAP and not mls:
-                        l00 += wo * ux
-                        l10 += wo * uy
-                        l20 += wo * uz
-                        l01 += go1 * sx
-                        l02 += go2 * sx
-                        l11 += go1 * sy
-                        l12 += go2 * sy
-                        l21 += go1 * sz
-                        l22 += go2 * sz
-            if mode != KINEMATICS:
-                if blend:
-                    v[p, 0] = flip * (v[p, 0] + dvx) + (1.0 - flip) * vpx
-                    v[p, 1] = flip * (v[p, 1] + dvy) + (1.0 - flip) * vpy
-                    v[p, 2] = flip * (v[p, 2] + dvz) + (1.0 - flip) * vpz
-                else:
-                    v[p, 0], v[p, 1], v[p, 2] = vpx, vpy, vpz
-                if affine:
-                    C[p, 0, 0], C[p, 0, 1], C[p, 0, 2] = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
-                    C[p, 1, 0], C[p, 1, 1], C[p, 1, 2] = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
-                    C[p, 2, 0], C[p, 2, 1], C[p, 2, 2] = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
-            if mode == REMAP:
-                rate[p, 0], rate[p, 1], rate[p, 2] = vpx, vpy, vpz
-                m = mass[p]
-                vrx, vry, vrz = v[p, 0], v[p, 1], v[p, 2]
-                if affine:
-                    cr00, cr01, cr02 = C[p, 0, 0], C[p, 0, 1], C[p, 0, 2]
-                    cr10, cr11, cr12 = C[p, 1, 0], C[p, 1, 1], C[p, 1, 2]
-                    cr20, cr21, cr22 = C[p, 2, 0], C[p, 2, 1], C[p, 2, 2]
-                for k in range(S):
-                    dz = (k - fz) * h2
-                    for j in range(S):
-                        dy = (j - fy) * h1
-                        row = (iy + j) * stride1 + (iz + k) * stride2 - offset
-                        wo = wy[j] * wz[k]
-                        for i in range(S):
-                            node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                            mw = m * (wx[i] * wo)
-                            px, py, pz = vrx, vry, vrz
-                            if affine:
-                                dx = (i - fx) * h0
-                                px += cr00 * dx + cr01 * dy + cr02 * dz
-                                py += cr10 * dx + cr11 * dy + cr12 * dz
-                                pz += cr20 * dx + cr21 * dy + cr22 * dz
-                            gp[node, 0] += mw * px
-                            gp[node, 1] += mw * py
-                            gp[node, 2] += mw * pz
-                continue
-            if mode == USL:
-                x[p, 0] += dt * vpx
-                x[p, 1] += dt * vpy
-                x[p, 2] += dt * vpz
-            else:
-                x[p, 0] += dt * rate[p, 0]
-                x[p, 1] += dt * rate[p, 1]
-                x[p, 2] += dt * rate[p, 2]
-            if mls:   # L_p = B_p D_p^-1: C_p itself after a USL gather
-                l00, l01, l02 = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
-                l10, l11, l12 = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
-                l20, l21, l22 = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
-            if not l_is_c:   # (else L_p is left to the particles' deferred update, solver/step/fused.py)
-                L[p, 0, 0], L[p, 0, 1], L[p, 0, 2] = l00, l01, l02
-                L[p, 1, 0], L[p, 1, 1], L[p, 1, 2] = l10, l11, l12
-                L[p, 2, 0], L[p, 2, 1], L[p, 2, 2] = l20, l21, l22
-            f00, f01, f02 = F[p, 0, 0], F[p, 0, 1], F[p, 0, 2]
-            f10, f11, f12 = F[p, 1, 0], F[p, 1, 1], F[p, 1, 2]
-            f20, f21, f22 = F[p, 2, 0], F[p, 2, 1], F[p, 2, 2]
-            n00 = f00 + dt * l00 * f00 + dt * l01 * f10 + dt * l02 * f20
-            n01 = f01 + dt * l00 * f01 + dt * l01 * f11 + dt * l02 * f21
-            n02 = f02 + dt * l00 * f02 + dt * l01 * f12 + dt * l02 * f22
-            n10 = f10 + dt * l10 * f00 + dt * l11 * f10 + dt * l12 * f20
-            n11 = f11 + dt * l10 * f01 + dt * l11 * f11 + dt * l12 * f21
-            n12 = f12 + dt * l10 * f02 + dt * l11 * f12 + dt * l12 * f22
-            n20 = f20 + dt * l20 * f00 + dt * l21 * f10 + dt * l22 * f20
-            n21 = f21 + dt * l20 * f01 + dt * l21 * f11 + dt * l22 * f21
-            n22 = f22 + dt * l20 * f02 + dt * l21 * f12 + dt * l22 * f22
-            F[p, 0, 0], F[p, 0, 1], F[p, 0, 2] = n00, n01, n02
-            F[p, 1, 0], F[p, 1, 1], F[p, 1, 2] = n10, n11, n12
-            F[p, 2, 0], F[p, 2, 1], F[p, 2, 2] = n20, n21, n22
-            J = n00 * (n11 * n22 - n12 * n21) - n01 * (n10 * n22 - n12 * n20) + n02 * (n10 * n21 - n11 * n20)
-            volume[p] = J * volume0[p]
-            if J <= 0.0 and bad[t] < 0:
+    shared_acc = acc.shape[0] == 1
+    S, affine, loaded, mls = support.ndim - 1, True, loaded_.ndim == 2, True   # compile-time constants
+    fold, inline = True, inline_.ndim == 2
+    gl = lanes[t]
+    gl[:, :] = 0.0   # (by the thread that adds into them)
+    bad[t] = -1
+    for p in range(np.uint64(lo), np.uint64(hi)):
+        sig00, sig01, sig02 = stress[p, 0, 0], stress[p, 0, 1], stress[p, 0, 2]
+        sig10, sig11, sig12 = stress[p, 1, 0], stress[p, 1, 1], stress[p, 1, 2]
+        sig20, sig21, sig22 = stress[p, 2, 0], stress[p, 2, 1], stress[p, 2, 2]
+        okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+        oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+        okz, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
+        if not (okx and oky and okz):      # (no break: an early exit slows the whole loop)
+            if bad[t] < 0:
                 bad[t] = p
-    if remaps and copies_mom.shape[0] > 0:
-        add_node_copies(grid_mom, copies_mom)
+            continue
+        m = mass[p]
+        ap = np.uint64(0) if shared_acc else p
+        mbx, mby, mbz = m * acc[ap, 0], m * acc[ap, 1], m * acc[ap, 2]
+        mvx, mvy, mvz = m * v[p, 0], m * v[p, 1], m * v[p, 2]
+        vol = volume[p]
+        if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w
+            if loaded:   # (without a body force dt m b is +0: adding it would change no sum)
+                mvx += dt * mbx
+                mvy += dt * mby
+                mvz += dt * mbz
+            if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)
+                s00, s01, s02 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1), dt * (vol * sig02 * d_inv2)
+                s10, s11, s12 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1), dt * (vol * sig12 * d_inv2)
+                s20, s21, s22 = dt * (vol * sig20 * d_inv0), dt * (vol * sig21 * d_inv1), dt * (vol * sig22 * d_inv2)
+            else:
+                s00, s01, s02 = dt * (vol * sig00), dt * (vol * sig01), dt * (vol * sig02)
+                s10, s11, s12 = dt * (vol * sig10), dt * (vol * sig11), dt * (vol * sig12)
+                s20, s21, s22 = dt * (vol * sig20), dt * (vol * sig21), dt * (vol * sig22)
+        elif mls:
+            s00, s01, s02 = vol * sig00 * d_inv0, vol * sig01 * d_inv1, vol * sig02 * d_inv2
+            s10, s11, s12 = vol * sig10 * d_inv0, vol * sig11 * d_inv1, vol * sig12 * d_inv2
+            s20, s21, s22 = vol * sig20 * d_inv0, vol * sig21 * d_inv1, vol * sig22 * d_inv2
+        else:
+            s00, s01, s02 = vol * sig00, vol * sig01, vol * sig02
+            s10, s11, s12 = vol * sig10, vol * sig11, vol * sig12
+            s20, s21, s22 = vol * sig20, vol * sig21, vol * sig22
+        mc00 = mc01 = mc02 = mc10 = mc11 = mc12 = mc20 = mc21 = mc22 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
+        if affine:
+            mc00, mc01, mc02 = m * C[p, 0, 0], m * C[p, 0, 1], m * C[p, 0, 2]
+            mc10, mc11, mc12 = m * C[p, 1, 0], m * C[p, 1, 1], m * C[p, 1, 2]
+            mc20, mc21, mc22 = m * C[p, 2, 0], m * C[p, 2, 1], m * C[p, 2, 2]
+        if fold and mls:
+            mc00, mc01, mc02 = mc00 - s00, mc01 - s01, mc02 - s02
+            mc10, mc11, mc12 = mc10 - s10, mc11 - s11, mc12 - s12
+            mc20, mc21, mc22 = mc20 - s20, mc21 - s21, mc22 - s22
+        column = lanes_of(0.0, mc00, mc10, mc20)
+        for k in range(S):
+            dz = (k - fz) * h2
+            for j in range(S):
+                dy = (j - fy) * h1
+                row = (iy + j) * stride1 + (iz + k) * stride2 - offset
+                wo = wy[j] * wz[k]
+                rx = mvx + mc01 * dy + mc02 * dz
+                ry = mvy + mc11 * dy + mc12 * dz
+                rz = mvz + mc21 * dy + mc22 * dz
+                base = lanes_of(m, rx, ry, rz)
+                for i in range(S):
+                    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                    w = wx[i] * wo
+                    dx = (i - fx) * h0
+                    add_to_row(gl, node, w, axpy(dx, column, base))
 
 
 @njit(parallel=True, cache=True)
@@ -341,84 +438,79 @@ def p2g_lanes(variant, x, v, C, mass, volume, stress, F, L, volume0, material, a
     which are then summed into grid_mass and grid_mom in thread order: the same bits as `p2g`.
 
     variant: `p2g`'s, with affine, mls and fold set."""
-    support, affine_, loaded_, mls_, fold_, inline_ = variant
+    threads = lanes.shape[0]
+    bounds = block_bounds(x.shape[0], threads)
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _p2g_lanes_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, volume, stress, F, L,
+                volume0, material, acc, frame, d_inv, grid_mass, grid_mom, lanes, bad, dt)
+    unpack_mass_momentum(grid_mass, grid_mom, lanes)
+
+
+@njit(cache=True, loop_body=True)
+def _g2p_lanes_block(t, lo, hi, x, v, C, F, volume, volume0, frame, v_new, v_lanes, dt, d_inv, threads, bad):
+    """Thread t's block of `g2p_lanes`: particles lo to hi."""
     lower, h, inv_h, cells, strides, offset = frame
     h0, h1, h2 = h[0], h[1], h[2]
     stride1 = strides[1]
     stride2 = strides[2]
     d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]
-    threads = lanes.shape[0]
-    shared_acc = acc.shape[0] == 1
-    bounds = block_bounds(x.shape[0], threads)
-    for t in prange(threads):
-        S, affine, loaded, mls = support.ndim - 1, True, loaded_.ndim == 2, True   # compile-time constants
-        fold, inline = True, inline_.ndim == 2
-        gl = lanes[t]
-        gl[:, :] = 0.0   # (by the thread that adds into them)
-        bad[t] = -1
-        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
-            sig00, sig01, sig02 = stress[p, 0, 0], stress[p, 0, 1], stress[p, 0, 2]
-            sig10, sig11, sig12 = stress[p, 1, 0], stress[p, 1, 1], stress[p, 1, 2]
-            sig20, sig21, sig22 = stress[p, 2, 0], stress[p, 2, 1], stress[p, 2, 2]
-            okx, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            oky, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            okz, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
-            if not (okx and oky and okz):      # (no break: an early exit slows the whole loop)
-                if bad[t] < 0:
-                    bad[t] = p
-                continue
-            m = mass[p]
-            ap = np.uint64(0) if shared_acc else p
-            mbx, mby, mbz = m * acc[ap, 0], m * acc[ap, 1], m * acc[ap, 2]
-            mvx, mvy, mvz = m * v[p, 0], m * v[p, 1], m * v[p, 2]
-            vol = volume[p]
-            if fold:   # dt f_I into the momentum: w (m v + dt m b) + m C (x_I - x_p) w - dt V sigma grad w
-                if loaded:   # (without a body force dt m b is +0: adding it would change no sum)
-                    mvx += dt * mbx
-                    mvy += dt * mby
-                    mvz += dt * mbz
-                if mls:   # (MLS: grad w = w D^-1 (x_I - x_p), so that dt V sigma D^-1 joins m C)
-                    s00, s01, s02 = dt * (vol * sig00 * d_inv0), dt * (vol * sig01 * d_inv1), dt * (vol * sig02 * d_inv2)
-                    s10, s11, s12 = dt * (vol * sig10 * d_inv0), dt * (vol * sig11 * d_inv1), dt * (vol * sig12 * d_inv2)
-                    s20, s21, s22 = dt * (vol * sig20 * d_inv0), dt * (vol * sig21 * d_inv1), dt * (vol * sig22 * d_inv2)
-                else:
-                    s00, s01, s02 = dt * (vol * sig00), dt * (vol * sig01), dt * (vol * sig02)
-                    s10, s11, s12 = dt * (vol * sig10), dt * (vol * sig11), dt * (vol * sig12)
-                    s20, s21, s22 = dt * (vol * sig20), dt * (vol * sig21), dt * (vol * sig22)
-            elif mls:
-                s00, s01, s02 = vol * sig00 * d_inv0, vol * sig01 * d_inv1, vol * sig02 * d_inv2
-                s10, s11, s12 = vol * sig10 * d_inv0, vol * sig11 * d_inv1, vol * sig12 * d_inv2
-                s20, s21, s22 = vol * sig20 * d_inv0, vol * sig21 * d_inv1, vol * sig22 * d_inv2
-            else:
-                s00, s01, s02 = vol * sig00, vol * sig01, vol * sig02
-                s10, s11, s12 = vol * sig10, vol * sig11, vol * sig12
-                s20, s21, s22 = vol * sig20, vol * sig21, vol * sig22
-            mc00 = mc01 = mc02 = mc10 = mc11 = mc12 = mc20 = mc21 = mc22 = 0.0   # m_p C_p (C holds one placeholder row without APIC)
-            if affine:
-                mc00, mc01, mc02 = m * C[p, 0, 0], m * C[p, 0, 1], m * C[p, 0, 2]
-                mc10, mc11, mc12 = m * C[p, 1, 0], m * C[p, 1, 1], m * C[p, 1, 2]
-                mc20, mc21, mc22 = m * C[p, 2, 0], m * C[p, 2, 1], m * C[p, 2, 2]
-            if fold and mls:
-                mc00, mc01, mc02 = mc00 - s00, mc01 - s01, mc02 - s02
-                mc10, mc11, mc12 = mc10 - s10, mc11 - s11, mc12 - s12
-                mc20, mc21, mc22 = mc20 - s20, mc21 - s21, mc22 - s22
-            column = lanes_of(0.0, mc00, mc10, mc20)
-            for k in range(S):
-                dz = (k - fz) * h2
-                for j in range(S):
-                    dy = (j - fy) * h1
-                    row = (iy + j) * stride1 + (iz + k) * stride2 - offset
-                    wo = wy[j] * wz[k]
-                    rx = mvx + mc01 * dy + mc02 * dz
-                    ry = mvy + mc11 * dy + mc12 * dz
-                    rz = mvz + mc21 * dy + mc22 * dz
-                    base = lanes_of(m, rx, ry, rz)
-                    for i in range(S):
-                        node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        w = wx[i] * wo
-                        dx = (i - fx) * h0
-                        add_to_row(gl, node, w, axpy(dx, column, base))
-    unpack_mass_momentum(grid_mass, grid_mom, lanes)
+    S = 3   # quadratic B-splines
+    bad[t] = -1
+    for p in range(np.uint64(lo), np.uint64(hi)):
+        _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
+        _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
+        _, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
+        vp = b0 = b1 = b2 = lanes_of(0.0, 0.0, 0.0, 0.0)   # v_p and B_p's columns, a lane per component
+        wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
+        for k in range(S):
+            dz = (k - fz) * h2
+            for j in range(S):
+                dy = (j - fy) * h1
+                row = (iy + j) * stride1 + (iz + k) * stride2 - offset
+                wo = wy[j] * wz[k]
+                s = tw = lanes_of(0.0, 0.0, 0.0, 0.0)
+                for i in range(S):
+                    node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
+                    v_node = load_row(v_lanes, node)
+                    s = axpy(wx[i], v_node, s)
+                    tw = axpy(wdx[i], v_node, tw)
+                vp = axpy(wo, s, vp)
+                b0 = axpy(wo, tw, b0)
+                b1 = axpy(wo * dy, s, b1)
+                b2 = axpy(wo * dz, s, b2)
+        vpx, vpy, vpz, _ = split(vp)
+        b00, b10, b20, _ = split(b0)
+        b01, b11, b21, _ = split(b1)
+        b02, b12, b22, _ = split(b2)
+        v[p, 0], v[p, 1], v[p, 2] = vpx, vpy, vpz
+        C[p, 0, 0], C[p, 0, 1], C[p, 0, 2] = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
+        C[p, 1, 0], C[p, 1, 1], C[p, 1, 2] = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
+        C[p, 2, 0], C[p, 2, 1], C[p, 2, 2] = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
+        x[p, 0] += dt * vpx
+        x[p, 1] += dt * vpy
+        x[p, 2] += dt * vpz
+        l00, l01, l02 = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
+        l10, l11, l12 = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
+        l20, l21, l22 = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
+        f00, f01, f02 = F[p, 0, 0], F[p, 0, 1], F[p, 0, 2]
+        f10, f11, f12 = F[p, 1, 0], F[p, 1, 1], F[p, 1, 2]
+        f20, f21, f22 = F[p, 2, 0], F[p, 2, 1], F[p, 2, 2]
+        n00 = f00 + dt * l00 * f00 + dt * l01 * f10 + dt * l02 * f20
+        n01 = f01 + dt * l00 * f01 + dt * l01 * f11 + dt * l02 * f21
+        n02 = f02 + dt * l00 * f02 + dt * l01 * f12 + dt * l02 * f22
+        n10 = f10 + dt * l10 * f00 + dt * l11 * f10 + dt * l12 * f20
+        n11 = f11 + dt * l10 * f01 + dt * l11 * f11 + dt * l12 * f21
+        n12 = f12 + dt * l10 * f02 + dt * l11 * f12 + dt * l12 * f22
+        n20 = f20 + dt * l20 * f00 + dt * l21 * f10 + dt * l22 * f20
+        n21 = f21 + dt * l20 * f01 + dt * l21 * f11 + dt * l22 * f21
+        n22 = f22 + dt * l20 * f02 + dt * l21 * f12 + dt * l22 * f22
+        F[p, 0, 0], F[p, 0, 1], F[p, 0, 2] = n00, n01, n02
+        F[p, 1, 0], F[p, 1, 1], F[p, 1, 2] = n10, n11, n12
+        F[p, 2, 0], F[p, 2, 1], F[p, 2, 2] = n20, n21, n22
+        J = n00 * (n11 * n22 - n12 * n21) - n01 * (n10 * n22 - n12 * n20) + n02 * (n10 * n21 - n11 * n20)
+        volume[p] = J * volume0[p]
+        if J <= 0.0 and bad[t] < 0:
+            bad[t] = p
 
 
 @njit(parallel=True, cache=True)
@@ -426,68 +518,8 @@ def g2p_lanes(x, v, C, F, volume, volume0, frame, v_new, v_lanes, dt, d_inv, thr
     """`g2p`'s USL pass for MLS in 3D: v_p, C_p = B_p D_p^-1, x_p; F_p and V_p from L_p = C_p (not
     written: solver/step/fused.py defers it), the nodes' velocities read as (v_x, v_y, v_z, 0)
     rows of v_lanes (n, 4; packed here from v_new). The same bits as `g2p`."""
-    lower, h, inv_h, cells, strides, offset = frame
-    h0, h1, h2 = h[0], h[1], h[2]
-    stride1 = strides[1]
-    stride2 = strides[2]
-    d_inv0, d_inv1, d_inv2 = d_inv[0], d_inv[1], d_inv[2]
     pack_velocity(v_new, v_lanes)
     bounds = block_bounds(x.shape[0], threads)
-    for t in prange(threads):
-        S = 3   # quadratic B-splines
-        bad[t] = -1
-        for p in range(np.uint64(bounds[t]), np.uint64(bounds[t + 1])):
-            _, ix, fx, wx, gx = _axis(S, x[p, 0], lower[0], inv_h[0], cells[0])
-            _, iy, fy, wy, gy = _axis(S, x[p, 1], lower[1], inv_h[1], cells[1])
-            _, iz, fz, wz, gz = _axis(S, x[p, 2], lower[2], inv_h[2], cells[2])
-            vp = b0 = b1 = b2 = lanes_of(0.0, 0.0, 0.0, 0.0)   # v_p and B_p's columns, a lane per component
-            wdx = wx[0] * ((0 - fx) * h0), wx[1] * ((1 - fx) * h0), wx[2] * ((2 - fx) * h0)
-            for k in range(S):
-                dz = (k - fz) * h2
-                for j in range(S):
-                    dy = (j - fy) * h1
-                    row = (iy + j) * stride1 + (iz + k) * stride2 - offset
-                    wo = wy[j] * wz[k]
-                    s = tw = lanes_of(0.0, 0.0, 0.0, 0.0)
-                    for i in range(S):
-                        node = np.uint64(row + ix + i)   # (strides[0] is 1: x fastest)
-                        v_node = load_row(v_lanes, node)
-                        s = axpy(wx[i], v_node, s)
-                        tw = axpy(wdx[i], v_node, tw)
-                    vp = axpy(wo, s, vp)
-                    b0 = axpy(wo, tw, b0)
-                    b1 = axpy(wo * dy, s, b1)
-                    b2 = axpy(wo * dz, s, b2)
-            vpx, vpy, vpz, _ = split(vp)
-            b00, b10, b20, _ = split(b0)
-            b01, b11, b21, _ = split(b1)
-            b02, b12, b22, _ = split(b2)
-            v[p, 0], v[p, 1], v[p, 2] = vpx, vpy, vpz
-            C[p, 0, 0], C[p, 0, 1], C[p, 0, 2] = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
-            C[p, 1, 0], C[p, 1, 1], C[p, 1, 2] = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
-            C[p, 2, 0], C[p, 2, 1], C[p, 2, 2] = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
-            x[p, 0] += dt * vpx
-            x[p, 1] += dt * vpy
-            x[p, 2] += dt * vpz
-            l00, l01, l02 = b00 * d_inv0, b01 * d_inv1, b02 * d_inv2
-            l10, l11, l12 = b10 * d_inv0, b11 * d_inv1, b12 * d_inv2
-            l20, l21, l22 = b20 * d_inv0, b21 * d_inv1, b22 * d_inv2
-            f00, f01, f02 = F[p, 0, 0], F[p, 0, 1], F[p, 0, 2]
-            f10, f11, f12 = F[p, 1, 0], F[p, 1, 1], F[p, 1, 2]
-            f20, f21, f22 = F[p, 2, 0], F[p, 2, 1], F[p, 2, 2]
-            n00 = f00 + dt * l00 * f00 + dt * l01 * f10 + dt * l02 * f20
-            n01 = f01 + dt * l00 * f01 + dt * l01 * f11 + dt * l02 * f21
-            n02 = f02 + dt * l00 * f02 + dt * l01 * f12 + dt * l02 * f22
-            n10 = f10 + dt * l10 * f00 + dt * l11 * f10 + dt * l12 * f20
-            n11 = f11 + dt * l10 * f01 + dt * l11 * f11 + dt * l12 * f21
-            n12 = f12 + dt * l10 * f02 + dt * l11 * f12 + dt * l12 * f22
-            n20 = f20 + dt * l20 * f00 + dt * l21 * f10 + dt * l22 * f20
-            n21 = f21 + dt * l20 * f01 + dt * l21 * f11 + dt * l22 * f21
-            n22 = f22 + dt * l20 * f02 + dt * l21 * f12 + dt * l22 * f22
-            F[p, 0, 0], F[p, 0, 1], F[p, 0, 2] = n00, n01, n02
-            F[p, 1, 0], F[p, 1, 1], F[p, 1, 2] = n10, n11, n12
-            F[p, 2, 0], F[p, 2, 1], F[p, 2, 2] = n20, n21, n22
-            J = n00 * (n11 * n22 - n12 * n21) - n01 * (n10 * n22 - n12 * n20) + n02 * (n10 * n21 - n11 * n20)
-            volume[p] = J * volume0[p]
-            if J <= 0.0 and bad[t] < 0:
-                bad[t] = p
+    for t in prange(threads):   # (t: unsigned; the block takes a signed t, as its serial twin's is)
+        _g2p_lanes_block(np.int64(t), bounds[t], bounds[t + 1], x, v, C, F, volume, volume0, frame, v_new,
+                v_lanes, dt, d_inv, threads, bad)
