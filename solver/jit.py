@@ -6,8 +6,8 @@ A parallel kernel (`njit(parallel=True)`) comes in two forms from one source
 (`ThreadedKernel`): numba's parallel form, and a serial twin in which `prange` is `range`,
 run while this thread's solver runs on one thread (`use_threads`, set by
 solver/threads.py), and by a kernel called outside a run in a process that has one core
-(MPM_CORES=1, as a worker's share or a test worker's). The twin compiles in about a third
-of the time (two_disks' 23 kernels: 7.8 s against 20.8 s), and gives the same bits, since
+(MPM_CORES=1, as a worker's share or a test worker's). The twin compiles in about 0.6 of
+the time (two_disks: 9.5 s against 16.7 s; docs/internals.md), and gives the same bits, since
 the parallel form on one thread runs the same blocks in the same order. So a run on one
 thread (a small scene, an MPI rank sharing the cores, a test worker) never waits on numba's
 parallel compiler; each form is compiled only when first called.
