@@ -216,8 +216,8 @@ def _blocked(signature: str, docstring: str, before: list[str], block: list[str]
     `_<name>_block` once per thread with the thread t and its particles lo to hi. The block is a
     function of its own (`before`, then `block`), compiled once for both the kernel's parallel
     form and its serial twin (solver/jit.py), and numba's parallel passes see a loop of one call
-    instead of the block's body: elastic_cube_3d's kernels on two threads compiled in 15 s
-    against 43 s with the body in the prange, two_disks' in 16 s against 22 s, the same bits. The
+    instead of the block's body: a short run of elastic_cube_3d on two threads compiled for 24 s
+    against 42 s with the body in the prange, two_disks for 17 s against 21 s, the same bits. The
     block is compiled as a parallel loop's body is (`loop_body`: numpy's error model, no two
     arrays the same memory). The kernel runs `prepare`, the threads, then `after`."""
     options = f", fastmath={CONTRACT}" if contract else ""
