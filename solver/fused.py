@@ -132,18 +132,18 @@ def _quadratic(f):
 
 # twin=True: a run on one thread calls the copies' serial twin through them (solver/jit.py).
 @njit(twin=True, cache=True)
-def _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force):
+def _reduce(dims, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force):
     if copies_mass.shape[0] > 0:
-        add_copies(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+        add_copies(dims, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
 
 @njit(twin=True, cache=True)
-def _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom):
+def _reduce_mass_momentum(dims, grid_mass, grid_mom, copies_mass, copies_mom):
     """`_reduce` of a P2G that folded the force into the momentum (no force copies to add); also
     the REMAP pass's with conduction, its remapped m c T in the place of the mass."""
     if copies_mass.shape[0] > 0:
-        _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom)
+        _add_mass_momentum_copies(dims, grid_mass, grid_mom, copies_mass, copies_mom)
 
 
 @njit(cache=True, inline="always")
@@ -155,16 +155,11 @@ def _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, dim):
 
 
 @njit(parallel=True, cache=True)
-def _add_mass_momentum_copies(grid_mass, grid_mom, copies_mass, copies_mom):
+def _add_mass_momentum_copies(dims, grid_mass, grid_mom, copies_mass, copies_mom):
     """As solver/threads.py's add_copies without the force: one parallel loop over the nodes
-    (two, one per array, were not faster), one per dimension (the component loop unrolled)."""
-    n, dim = grid_mom.shape
-    if dim == 2:
-        for i in prange(n):
-            _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, 2)
-    else:
-        for i in prange(n):
-            _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, 3)
+    (two, one per array, were not faster), the component loop unrolled (`dims`)."""
+    for i in prange(grid_mom.shape[0]):
+        _add_mass_momentum_at(grid_mass, grid_mom, copies_mass, copies_mom, i, len(dims))
 
 
 @njit(twin=True, cache=True)

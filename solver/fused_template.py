@@ -450,7 +450,7 @@ def _p2g(dim: int, thermal: bool, contact: bool, stress: tuple | None, contract:
          *(["pr, gr = own(t, presence, copies_presence), own(t, gradient, copies_gradient)"] if contact else [])],
         _p2g_particle(dim, thermal, contact, stress),
         ["if variant[4].ndim == 2:   # (fold_)",
-         "    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)",
+         "    _reduce_mass_momentum(DIMS, grid_mass, grid_mom, copies_mass, copies_mom)",
          "else:",
          *_p2g_reduce(thermal, contact)], contract, threads="copies_mass.shape[0] + 1")
 
@@ -475,7 +475,7 @@ def _p2g_reduce(thermal: bool, contact: bool) -> list[str]:
     if thermal:   # (with an empty second array)
         return ["    _reduce_with(grid_mass, grid_mom, grid_force, heat, heat[:, :0], copies_mass, copies_mom,",
                 "                 copies_force, copies_heat, copies_heat[:, :, :0])"]
-    return ["    _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]
+    return ["    _reduce(DIMS, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)"]
 
 
 # -- MLS's P2G, vectorised in part ----------------------------------------------------
@@ -648,7 +648,7 @@ def _p2g_mls(dim: int, stress: tuple | None, contract: bool, lanes: bool = False
          "for chunk in range((total + CHUNK - 1) // CHUNK):",
          *_indent(_p2g_mls_chunk(dim, stress, lanes), 1)],
         ["unpack_mass_momentum(grid_mass, grid_mom, lanes)" if lanes else
-         "_reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)"], contract,
+         "_reduce_mass_momentum(DIMS, grid_mass, grid_mom, copies_mass, copies_mom)"], contract,
         threads="lanes.shape[0]" if lanes else "copies_mass.shape[0] + 1", particles="volume.shape[0]")
 
 
@@ -850,7 +850,7 @@ def _g2p(dim: int, thermal: bool, contact: bool, update: tuple | None, contract:
          "gp = own(t, grid_mom, copies_mom) if mode == REMAP else grid_mom",
          *(["tr = own_zeroed(t, remapped, copies_remapped) if mode == REMAP else remapped"] if thermal else [])],
         _g2p_particle(dim, thermal, contact, update),
-        ["if remaps:", "    _reduce_mass_momentum(remapped, grid_mom, copies_remapped, copies_mom)"]
+        ["if remaps:", "    _reduce_mass_momentum(DIMS, remapped, grid_mom, copies_remapped, copies_mom)"]
         if thermal else
         ["if remaps and copies_mom.shape[0] > 0:", "    add_node_copies(grid_mom, copies_mom)"], contract,
         threads="copies_mom.shape[0] + 1", prepare=["remaps = variant[1].ndim - 1 == REMAP   # (mode_)"])
@@ -1126,6 +1126,7 @@ def source(dim: int, thermal: bool = False, contact: bool = False, stress: tuple
     # MLS in 3D, and 2D's P2G scatter: a node's values in four lanes (solver/lanes.py)
     lanes = not (thermal or contact)
     header += LANES_IMPORTS.format(operations="contracted" if contract else "exact") if lanes else ""
+    header += f"\n\nDIMS = (0,) * {dim}   # the dimension as a compile-time constant (solver/kernels.py axes)"
     return "\n".join([header, *_p2g(dim, thermal, contact, stress, contract),
                       *_g2p(dim, thermal, contact, update, contract),
                       *(_p2g_mls(dim, stress, contract) + _p2g_mls(dim, stress, contract, lanes=True)

@@ -39,8 +39,16 @@ from solver.jit import njit, prange
 from solver.threads import add_copies, add_node_copies, block_bounds, first_of, own
 
 
+def axes(dim: int) -> tuple:
+    """`dim` as a kernel's compile-time constant: a tuple of that length, read as `len(dims)`.
+    numba compiles one specialisation per tuple length, so loops over `range(len(dims))`
+    unroll as over a literal; one loop over a runtime dim ran the linear elastic update
+    2.3-3.5x slower."""
+    return (0,) * dim
+
+
 def stencil_spec(dim: int, nodes_per_particle: int) -> tuple:
-    return ((0,) * dim, (0,) * nodes_per_particle)
+    return (axes(dim), (0,) * nodes_per_particle)
 
 
 def widest_stencil(dim: int) -> int:
@@ -77,7 +85,7 @@ def p2g(spec, idx, w, dw, mass, vel, volume, stress, acc, grid_mass, grid_mom, g
         _p2g_block(dims, nodes, bounds[t], bounds[t + 1], idx, w, dw, mass, vel, volume, stress, acc,
                    own(t, grid_mass, copies_mass), own(t, grid_mom, copies_mom), own(t, grid_force, copies_force))
     if blocks > 1:
-        add_copies(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+        add_copies(dims, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
 @njit(cache=True)
@@ -168,9 +176,9 @@ def _force_block(dims, nodes, start, stop, idx, w, dw, mass, volume, stress, acc
 
 # The node loops below run on every thread: each node is its own (the same bits for any
 # thread count), and their divisions made the serial loop about 3 % of a 2D MLS step at
-# one thread (cProfile) and twice that share at two. Each has one loop per dimension, so that
-# the component loop unrolls and the node loop vectorises: integrate_nodes 1.7x in 2D and
-# 1.3x in 3D at one thread, the same divisions (docs/benchmarks.md, issue 18 twelfth part).
+# one thread (cProfile) and twice that share at two. Each takes the dimension as a compile-time
+# constant (`dims`, `axes`), so that the component loop unrolls and the node loop vectorises:
+# integrate_nodes 1.7x in 2D and 1.3x in 3D at one thread, the same divisions.
 
 @njit(cache=True, inline="always")
 def _nodal_velocity_at(grid_mass, grid_mom, v, node, dim):
@@ -180,19 +188,11 @@ def _nodal_velocity_at(grid_mass, grid_mom, v, node, dim):
 
 
 @njit(parallel=True, cache=True)
-def nodal_velocity(grid_mass, grid_mom, v):
+def nodal_velocity(dims, grid_mass, grid_mom, v):
     """v_I = (mv)_I / m_I: a mass-weighted average of particle velocities, bounded
     however small m_I is; 0 on nodes no particle touches."""
-    n_nodes, dim = v.shape
-    if dim == 2:
-        for node in prange(n_nodes):
-            _nodal_velocity_at(grid_mass, grid_mom, v, node, 2)
-    elif dim == 3:
-        for node in prange(n_nodes):
-            _nodal_velocity_at(grid_mass, grid_mom, v, node, 3)
-    else:
-        for node in prange(n_nodes):
-            _nodal_velocity_at(grid_mass, grid_mom, v, node, 1)
+    for node in prange(v.shape[0]):
+        _nodal_velocity_at(grid_mass, grid_mom, v, node, len(dims))
 
 
 @njit(cache=True, inline="always")
@@ -205,7 +205,7 @@ def _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new
 
 
 @njit(parallel=True, cache=True)
-def integrate_nodes(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new):
+def integrate_nodes(dims, dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new):
     """v_I^t = (mv)_I / m_I and v~_I^{t+dt} = v_I^t + dt f_I / m_I.
 
     The acceleration f_I / m_I is unbounded on nodes that a particle barely
@@ -213,16 +213,8 @@ def integrate_nodes(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_n
     cut-off of review eq. 2.63 applied to the acceleration rather than the
     velocity, so that a rigid translation stays exact.
     """
-    n_nodes, dim = v_old.shape
-    if dim == 2:
-        for node in prange(n_nodes):
-            _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new, node, 2)
-    elif dim == 3:
-        for node in prange(n_nodes):
-            _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new, node, 3)
-    else:
-        for node in prange(n_nodes):
-            _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new, node, 1)
+    for node in prange(v_old.shape[0]):
+        _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new, node, len(dims))
 
 
 @njit(cache=True)

@@ -87,19 +87,12 @@ def _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_f
 
 
 @njit(parallel=True, cache=True)
-def add_copies(mass, momentum, force, copies_mass, copies_momentum, copies_force):
+def add_copies(dims, mass, momentum, force, copies_mass, copies_momentum, copies_force):
     """Add the copies into the grid's arrays, node by node (the nodes split among threads);
-    one loop per dimension, so that the component loop unrolls (solver/kernels.py's node loops)."""
-    n, dim = momentum.shape
-    if dim == 2:
-        for i in numba.prange(n):
-            _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, 2)
-    elif dim == 3:
-        for i in numba.prange(n):
-            _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, 3)
-    else:
-        for i in numba.prange(n):
-            _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, 1)
+    `dims` makes the dimension a compile-time constant, so that the component loop unrolls
+    (solver/kernels.py `axes`)."""
+    for i in numba.prange(momentum.shape[0]):
+        _add_copies_at(mass, momentum, force, copies_mass, copies_momentum, copies_force, i, len(dims))
 
 
 @njit(cache=True)

@@ -14,6 +14,8 @@ from solver.lanes import exact as _lane_operations
 
 axpy, add_to_row = _lane_operations.axpy, _lane_operations.add_to_row
 
+DIMS = (0,) * 2   # the dimension as a compile-time constant (solver/kernels.py axes)
+
 
 @njit(cache=True, loop_body=True)
 def _p2g_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
@@ -144,9 +146,9 @@ def p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, fr
                 material, acc, frame, d_inv, grid_mass, grid_mom, grid_force, copies_mass, copies_mom,
                 copies_force, bad, dt)
     if variant[4].ndim == 2:   # (fold_)
-        _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+        _reduce_mass_momentum(DIMS, grid_mass, grid_mom, copies_mass, copies_mom)
     else:
-        _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+        _reduce(DIMS, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
 @njit(cache=True, loop_body=True)
@@ -426,7 +428,7 @@ def p2g_mls(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc
         _p2g_mls_block(np.int64(t), bounds[t], bounds[t + 1], variant, x, v, C, mass, volume, stress, F, L,
                 volume0, material, acc, lower, h, inv_h, cells, strides, offset, d_inv, grid_mass, grid_mom,
                 copies_mass, copies_mom, bad, dt)
-    _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+    _reduce_mass_momentum(DIMS, grid_mass, grid_mom, copies_mass, copies_mom)
 
 
 @njit(cache=True, loop_body=True)

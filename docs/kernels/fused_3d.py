@@ -10,6 +10,8 @@ from solver.lanes import exact as _lane_operations
 
 axpy, add_to_row = _lane_operations.axpy, _lane_operations.add_to_row
 
+DIMS = (0,) * 3   # the dimension as a compile-time constant (solver/kernels.py axes)
+
 
 @njit(cache=True, loop_body=True)
 def _p2g_block(t, lo, hi, variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, frame, d_inv,
@@ -170,9 +172,9 @@ def p2g(variant, x, v, C, mass, volume, stress, F, L, volume0, material, acc, fr
                 material, acc, frame, d_inv, grid_mass, grid_mom, grid_force, copies_mass, copies_mom,
                 copies_force, bad, dt)
     if variant[4].ndim == 2:   # (fold_)
-        _reduce_mass_momentum(grid_mass, grid_mom, copies_mass, copies_mom)
+        _reduce_mass_momentum(DIMS, grid_mass, grid_mom, copies_mass, copies_mom)
     else:
-        _reduce(grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
+        _reduce(DIMS, grid_mass, grid_mom, grid_force, copies_mass, copies_mom, copies_force)
 
 
 @njit(cache=True, loop_body=True)

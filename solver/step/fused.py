@@ -270,7 +270,7 @@ class FusedPhases(Phases):
         its second division (2D block, 226^2 nodes: 307 -> 179 us at one thread, 305 -> 131 at two)."""
         if self.plan.fold:
             g = self.sim.grid
-            kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
+            kernels.nodal_velocity(self.sim.spec[0], g.mass, g.momentum, g.v_old)
             np.copyto(g.v_new, g.v_old)
         else:
             super()._integrate(dt)

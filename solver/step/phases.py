@@ -86,12 +86,12 @@ class Phases:
     def _integrate(self, dt: float) -> None:
         """v_I^t and v~_I^{t+dt}, unconstrained, from the nodal sums."""
         sim, g = self.sim, self.sim.grid
-        kernels.integrate_nodes(dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
+        kernels.integrate_nodes(sim.spec[0], dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
 
     def current_velocities(self) -> None:
         """v_I^t = (mv)_I / m_I, constrained: USF's velocity for the stress update."""
         g = self.sim.grid
-        kernels.nodal_velocity(g.mass, g.momentum, g.v_old)
+        kernels.nodal_velocity(self.sim.spec[0], g.mass, g.momentum, g.v_old)
         self._constrain(g.v_old)
         self.sim.domain.share_nodes(g.v_old)
 
@@ -100,7 +100,7 @@ class Phases:
         sim = self.sim
         g = sim.grid
         sim.domain.sum_ghosts(g.momentum)
-        kernels.nodal_velocity(g.mass, g.momentum, g.v_new)
+        kernels.nodal_velocity(sim.spec[0], g.mass, g.momentum, g.v_new)
         self._constrain(g.v_new)
         sim.domain.share_nodes(g.v_new)
 

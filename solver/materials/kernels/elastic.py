@@ -1,6 +1,8 @@
 """Isotropic elastic constants shared by the elastic models."""
 from __future__ import annotations
 
+import numpy as np
+
 
 class IsotropicElastic:
     """Lame parameters and the dilatational wave speed sqrt((lambda + 2 mu) / rho) (review eq. 2.71),
@@ -20,6 +22,11 @@ class IsotropicElastic:
     @property
     def thermal_bulk_modulus(self) -> float:
         return self.lam + 2.0 * self.mu / 3.0
+
+    def stress_parameters(self) -> np.ndarray:
+        """q0, q1 of the lines a model gives the fused kernels (`stress_lines` or
+        `stress_update_lines`): lambda and mu."""
+        return np.array([self.lam, self.mu])
 
     def strain_energy(self, particles, sl: slice) -> float:
         return float(self.particle_strain_energy(particles, sl).sum())

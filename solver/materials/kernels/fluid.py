@@ -22,6 +22,8 @@ import math
 import numpy as np
 from solver.jit import njit, prange
 
+from solver.kernels import axes, flag
+
 
 @njit(cache=True, inline="always")
 def _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, dim, linear):
@@ -45,30 +47,15 @@ def _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure,
 
 
 @njit(parallel=True, cache=True)
-def _update(L, volume, volume0, stress, rho0, K, gamma, mu, min_pressure):
-    """Stress of every particle; returns the largest sound speed. One loop per dimension and
-    per gamma = 1 or not, `dim` and `linear` compile-time constants in each (as
-    solver/materials/kernels/linear_elastic.py): pow() was 21 of the 27 ns a particle of
-    mpm88's stress update (gamma = 1), and a runtime test of gamma inside the loop did not
-    remove it (LLVM may evaluate pow before the select)."""
-    n, dim = L.shape[0], L.shape[1]
+def _update(dims, linear, L, volume, volume0, stress, rho0, K, gamma, mu, min_pressure):
+    """Stress of every particle; returns the largest sound speed. `dims` and `linear`
+    (solver/kernels.py `axes`, `flag(gamma == 1)`) are compile-time constants: pow() was 21
+    of the 27 ns a particle of mpm88's stress update (gamma = 1), and a runtime test of gamma
+    inside the loop did not remove it (LLVM may evaluate pow before the select)."""
     c2_max = 0.0   # (a max reduction over threads)
-    if dim == 2 and gamma == 1.0:
-        for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 2, True))
-    elif dim == 2:
-        for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 2, False))
-    elif dim == 3 and gamma == 1.0:
-        for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 3, True))
-    elif dim == 3:
-        for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 3, False))
-    else:   # 1D: gamma tested at run time (the same bits, maybe not the speed)
-        for p in prange(n):
-            c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, 1,
-                                             gamma == 1.0))
+    for p in prange(L.shape[0]):
+        c2_max = max(c2_max, _update_one(L, volume, volume0, stress, p, rho0, K, gamma, mu, min_pressure, len(dims),
+                                         linear.ndim == 2))
     return math.sqrt(c2_max)
 
 
@@ -91,7 +78,7 @@ class Fluid:
     stress_sets_wave_speed = True   # (a stress update put off leaves the last one's: solver/step/fused.py)
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
-        self.wave_speed = _update(particles.L[sl], particles.volume[sl], particles.volume0[sl], particles.stress[sl],
+        self.wave_speed = _update(axes(particles.dimension), flag(self.gamma == 1.0), particles.L[sl], particles.volume[sl], particles.volume0[sl], particles.stress[sl],
                                   self.density, self.K, self.gamma, self.mu, self.min_pressure)
 
     def stress_lines(self, dim: int) -> tuple[str, ...]:

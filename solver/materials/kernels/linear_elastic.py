@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from solver.jit import njit, prange
 
+from solver.kernels import axes
 from solver.materials.kernels.elastic import IsotropicElastic
 
 
@@ -26,20 +27,9 @@ def _update_one(L, stress, p, dt, lam, mu, dim):
 
 
 @njit(parallel=True, cache=True)
-def _update(L, stress, dt, lam, mu):
-    # One loop per dimension, so that `dim` is a compile-time constant in each and the
-    # 2x2 / 3x3 loops unroll: measured 2.3-3.5x faster than one loop over a runtime dim
-    # (docs/benchmarks.md, issue 18, second part); the same sums in the same order.
-    n, dim = L.shape[0], L.shape[1]
-    if dim == 2:
-        for p in prange(n):
-            _update_one(L, stress, p, dt, lam, mu, 2)
-    elif dim == 3:
-        for p in prange(n):
-            _update_one(L, stress, p, dt, lam, mu, 3)
-    else:
-        for p in prange(n):
-            _update_one(L, stress, p, dt, lam, mu, 1)
+def _update(dims, L, stress, dt, lam, mu):
+    for p in prange(L.shape[0]):
+        _update_one(L, stress, p, dt, lam, mu, len(dims))   # (solver/kernels.py `axes`)
 
 
 @njit(cache=True)
@@ -57,7 +47,7 @@ def _energy(stress, volume, lam, mu, out):
 
 class LinearElastic(IsotropicElastic):
     def update_stress(self, particles, sl: slice, dt: float) -> None:
-        _update(particles.L[sl], particles.stress[sl], dt, self.lam, self.mu)
+        _update(axes(particles.dimension), particles.L[sl], particles.stress[sl], dt, self.lam, self.mu)
 
     def stress_update_lines(self, dim: int) -> tuple[str, ...]:
         """This update as the fused G2P runs it, right after it forms L_p (solver/fused_template.py
@@ -68,10 +58,6 @@ class LinearElastic(IsotropicElastic):
         return (f"le_tr = ({trace}) * dt",
                 *[f"stress[p, {a}, {a}] += q0 * le_tr" for a in range(3)],
                 *[f"stress[p, {a}, {b}] += q1 * dt * (l{a}{b} + l{b}{a})" for a in range(dim) for b in range(dim)])
-
-    def stress_parameters(self) -> np.ndarray:
-        """q0, q1 of `stress_update_lines`."""
-        return np.array([self.lam, self.mu])
 
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         out = np.empty(sl.stop - sl.start)
