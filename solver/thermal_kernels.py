@@ -79,6 +79,18 @@ def integrate_block(start, stop, dt, heat, cutoff, T_old, T_new, T_change):
         T_change[i] = T_new[i] - T_old[i]
 
 
+@njit(cache=True, inline="always")
+def _capacity_at(heat, i, n_nodes, cutoff):
+    """C_I of node i: the capacities of its fields (one per body with contact) that hold heat,
+    above `cutoff`, summed."""
+    capacity = 0.0
+    for f in range(heat.shape[0] // n_nodes):
+        e = f * n_nodes + i
+        if heat[e, 0] > cutoff:
+            capacity += heat[e, 0]
+    return capacity
+
+
 @njit(cache=True)
 def boundary_heat(node, area, flux, coefficient, ambient, which, n_nodes, heat, cutoff):
     """Q_I += A_I (q* + h (T_amb - T_I^t)) on the faces' nodes that have capacity, with
@@ -89,12 +101,11 @@ def boundary_heat(node, area, flux, coefficient, ambient, which, n_nodes, heat, 
     total = 0.0
     for j in range(node.shape[0]):
         i = node[j]
-        capacity = 0.0
+        capacity = _capacity_at(heat, i, n_nodes, cutoff)
         weighted = 0.0
         for f in range(fields):
             e = f * n_nodes + i
             if heat[e, 0] > cutoff:
-                capacity += heat[e, 0]
                 weighted += heat[e, 1]
         if capacity > 0.0:
             c = which[j]
@@ -137,12 +148,11 @@ def share_temperature(heat, touching, n_nodes, cutoff, T_grid):
     for i in range(n_nodes):
         if not touching[i]:
             continue
-        capacity = 0.0
+        capacity = _capacity_at(heat, i, n_nodes, cutoff)
         weighted = 0.0
         for f in range(fields):
             e = f * n_nodes + i
             if heat[e, 0] > cutoff:
-                capacity += heat[e, 0]
                 weighted += heat[e, 0] * T_grid[e]
         if capacity > 0.0:
             mean = weighted / capacity
@@ -162,14 +172,12 @@ def deposit_heat(heat, touching, n_nodes, cutoff, added, T_new):
     lost = 0.0
     for i in range(n_nodes):
         if touching.shape[0] > 0 and touching[i]:
-            capacity = 0.0
+            capacity = _capacity_at(heat, i, n_nodes, cutoff)
             q = 0.0
             for f in range(fields):
                 e = f * n_nodes + i
                 q += added[e]
                 added[e] = 0.0
-                if heat[e, 0] > cutoff:
-                    capacity += heat[e, 0]
             if q == 0.0:
                 continue
             if capacity > 0.0:
