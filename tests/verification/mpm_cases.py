@@ -19,6 +19,12 @@ class Case:
         return read_frame(self.path, index)
 
 
+def run_scene(scene, folder) -> Case:
+    """Run `scene` into `folder` (the solver imported at the first run, not when tests are collected)."""
+    from solver import run
+    return Case(run(scene, folder))
+
+
 def centre_of_mass_velocity(frame):
     f = frame["fields"]
     return (f["mass"][:, None] * f["velocity"]).sum(axis=0) / f["mass"].sum()

@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from billet import HALF_HEIGHT, R, billet_scene
+from mpm_cases import run_scene
 
 CELL, SPEED, STRAIN = 1.25e-3, 10.0, 0.1
 MARKS = (0.025, 0.05, 0.075, 0.1)          # compressions (of the half height) compared
@@ -24,11 +25,9 @@ def mean_load(displacement, load, at):
 
 @pytest.fixture(scope="module")
 def curves(tmp_path_factory):
-    from mpm_cases import Case
-    from solver import run
     out = {}
     for dim in (2, 3):
-        case = Case(run(billet_scene(dim, CELL, SPEED, STRAIN, frames=2), tmp_path_factory.mktemp(f"billet{dim}")))
+        case = run_scene(billet_scene(dim, CELL, SPEED, STRAIN, frames=2), tmp_path_factory.mktemp(f"billet{dim}"))
         assert case.result.status == "complete", case.result.message
         out[dim] = load_curve(case, quarter=dim == 3)
     return out

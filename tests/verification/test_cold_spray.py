@@ -24,14 +24,13 @@ import numpy as np
 import pytest
 
 from cold_spray import RADIUS, coarse_axisymmetric, impact, plastic_work, splat_measures, variant
+from mpm_cases import run_scene
 
 CONTACTS = ("single_field", "friction")
 
 
 def run_case(scene, tmp_path_factory, name):
-    from mpm_cases import Case
-    from solver import run
-    case = Case(run(scene, tmp_path_factory.mktemp(name)))
+    case = run_scene(scene, tmp_path_factory.mktemp(name))
     assert case.result.status == "complete", case.result.message
     return case
 

@@ -18,6 +18,8 @@
 """
 import pytest
 
+from mpm_cases import run_scene
+
 from solver.manufactured import Options, cube_displacement, cube_scene
 from solver.norms import errors_of_result, fitted_order, observed_orders
 
@@ -86,8 +88,6 @@ def vortex_errors(h: float, shape: str, end: float) -> dict:
 
     import numpy as np
 
-    from mpm_cases import Case
-    from solver import run
     from solver.manufactured import R_OUT, vortex_displacement, vortex_scene
     cpdi = vortex_scene(h, Options(formulation="ulmpm", shape=shape, ppc=2, flip_ratio=1.0, frames=3), end=end)
     cpdi["grid"].update(lower=[-R_OUT - 2 * h] * 2, upper=[R_OUT + 2 * h] * 2)   # room for ULMPM's particles
@@ -96,7 +96,7 @@ def vortex_errors(h: float, shape: str, end: float) -> dict:
     out, extent = {}, 0.0
     with tempfile.TemporaryDirectory() as folder:
         for name, scene in (("cpdi", cpdi), ("hats", hats)):
-            case = Case(run(scene, Path(folder) / name))
+            case = run_scene(scene, Path(folder) / name)
             assert case.result.status == "complete" and case.result.time == pytest.approx(end), case.result.message
             out[name] = errors_of_result(case.path, vortex_displacement).e2
             if name == "cpdi":

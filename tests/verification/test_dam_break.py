@@ -20,6 +20,8 @@ import math
 import numpy as np
 import pytest
 
+from mpm_cases import run_scene
+
 from solver.examples import DEFAULT_DIR
 
 G, L0 = 9.81, 0.6
@@ -63,11 +65,8 @@ def front_curve(case):
 
 @pytest.fixture(scope="module")
 def dam(tmp_path_factory):
-    from mpm_cases import Case
-
-    from solver import run
     scene = coarse_scene()
-    return scene, Case(run(scene, tmp_path_factory.mktemp("dam") / "coarse"))
+    return scene, run_scene(scene, tmp_path_factory.mktemp("dam") / "coarse")
 
 
 def test_front_between_experiment_and_shallow_water_bound(dam):

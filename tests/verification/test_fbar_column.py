@@ -26,6 +26,8 @@ and tests nothing): asserted checkerboard > 0.5, i.e. 40x the bound above.
 import numpy as np
 import pytest
 
+from mpm_cases import run_scene
+
 RHO, G, NU, HEIGHT, WIDTH, H_CELL, PPC = 1000.0, 9.81, 0.4999, 0.5, 0.2, 0.025, 2
 SCALE = RHO * G * HEIGHT
 
@@ -69,10 +71,7 @@ def column_measures(case) -> dict:
 
 @pytest.fixture(scope="module")
 def columns(tmp_path_factory):
-    from mpm_cases import Case
-
-    from solver import run
-    return {fbar: column_measures(Case(run(column_scene(fbar), tmp_path_factory.mktemp(f"fbar{fbar}") / "run")))
+    return {fbar: column_measures(run_scene(column_scene(fbar), tmp_path_factory.mktemp(f"fbar{fbar}") / "run"))
             for fbar in (False, True)}
 
 
@@ -99,13 +98,10 @@ NEO_HOOKEAN = {"model": "neo_hookean", "density": RHO, "youngs_modulus": 2.0e5, 
                          ids=["tlmpm", "neo_hookean"])
 def test_fbar_column_tlmpm_and_a_material_of_F(tmp_path, formulation, material):
     """The same bounds with TLMPM, and with a model that reads F (the linear elastic one reads L)."""
-    from mpm_cases import Case
-
-    from solver import run
     scene = column_scene(True, formulation)
     if material is not None:
         scene["materials"]["m"] = material
-    m = column_measures(Case(run(scene, tmp_path / "run")))
+    m = column_measures(run_scene(scene, tmp_path / "run"))
     assert m["mean_syy"] < 0.025
     assert m["bottom_syy"] < 0.05
     assert m["checkerboard"] < 0.0125

@@ -49,6 +49,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mpm_cases import run_scene
+
 E, NU, TRACTION = 250.0, 0.4999, 6.25
 MID_EDGE = 52.0   # y of the published reference point (48, 52), the middle of the loaded edge
 # The published value (Krysl, FinEALE): shear modulus 0.375, lambda 7500 (poisson_ratio 0.499975), total
@@ -91,10 +93,7 @@ def edge_displacement(case, cell: float, y: float = MID_EDGE) -> float:
 
 
 def run_cook(cell: float, fbar: bool, path, y: float = MID_EDGE) -> tuple[float, dict]:
-    from mpm_cases import Case
-
-    from solver import run
-    case = Case(run(cook_scene(cell, fbar), path))
+    case = run_scene(cook_scene(cell, fbar), path)
     return edge_displacement(case, cell, y), case.series()
 
 

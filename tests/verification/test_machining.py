@@ -18,6 +18,7 @@ import pytest
 
 from machining import DEPTH, HEIGHT, chip_rise, cutting_forces, machining_scene, merchant, plateau, rake_angle, \
     tool_travel
+from mpm_cases import run_scene
 
 
 @pytest.fixture(scope="module")
@@ -26,10 +27,8 @@ def steel():
 
 
 def _run(tmp_path_factory, cells_x, cells_y, cut, energies):
-    from mpm_cases import Case
-    from solver import run
     scene = machining_scene(cells_x, cells_y, cut, frames=3, energies=energies)
-    case = Case(run(scene, tmp_path_factory.mktemp("machining")))
+    case = run_scene(scene, tmp_path_factory.mktemp("machining"))
     case.scene = scene
     return case
 

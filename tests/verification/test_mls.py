@@ -25,7 +25,7 @@ import pytest
 
 import test_dam_break as dam_break
 import test_still_water as still_water
-from mpm_cases import Case
+from mpm_cases import run_scene
 from test_apic import OMEGA, grid_angular_momentum, spinning_disk
 from test_mms_cube import LEVELS
 
@@ -140,7 +140,7 @@ MLS = {"scheme": "musl", "shape_function": "cubic_bspline", "transfer": "mls"}
 def test_dam_break_front_between_experiment_and_shallow_water(tmp_path):
     scene = dam_break.coarse_scene()
     scene["method"] = MLS
-    case = Case(run(scene, tmp_path / "dam"))
+    case = run_scene(scene, tmp_path / "dam")
     dam_break.test_front_between_experiment_and_shallow_water_bound((scene, case))
     dam_break.test_stable_no_energy_growth_nobody_escapes((scene, case))
 
@@ -157,7 +157,7 @@ def test_still_water_hydrostatic(tmp_path):
     scene = still_water.still_scene()
     scene["method"] = MLS
     scene["damping"] = {"type": "viscous", "coefficient": 5.0}
-    case = Case(run(scene, tmp_path / "still"))
+    case = run_scene(scene, tmp_path / "still")
     assert case.result.status == "complete"
     f = case.frame(-1)["fields"]
     x, p = f["position"], f["pressure"]

@@ -19,6 +19,8 @@ damping dominates: the order from 0.1 to 0.05 is 1.5 with 0.99 and 1.9 with 1.0.
 import numpy as np
 import pytest
 
+from mpm_cases import run_scene
+
 from solver.manufactured import Options, vortex_angle, vortex_displacement, vortex_scene
 from solver.norms import errors_of_result, observed_orders
 
@@ -28,13 +30,10 @@ PEAK = 0.5
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    from mpm_cases import Case
-    from solver import run
-
     out = {}
     for h in LEVELS:
         scene = vortex_scene(h, Options(shape="bernstein", flip_ratio=1.0, frames=11), end=PEAK)
-        out[h] = Case(run(scene, tmp_path_factory.mktemp(f"vortex{round(1 / h)}")))
+        out[h] = run_scene(scene, tmp_path_factory.mktemp(f"vortex{round(1 / h)}"))
         assert out[h].result.status == "complete", out[h].result.message
     return out
 

@@ -10,6 +10,8 @@ import math
 import numpy as np
 import pytest
 
+from mpm_cases import run_scene
+
 H_CELL, PPC = 0.01, 2
 W, H = 0.1, 0.2                    # 10 x 20 cells
 E, NU, RHO = 1e7, 0.3, 1000.0
@@ -43,9 +45,7 @@ def platen_scene(end=RAMP + HOLD):
 
 @pytest.fixture(scope="module")
 def platen(tmp_path_factory):
-    from mpm_cases import Case
-    from solver import run
-    return Case(run(platen_scene(), tmp_path_factory.mktemp("platen")))
+    return run_scene(platen_scene(), tmp_path_factory.mktemp("platen"))
 
 
 def test_platen_moves_as_prescribed(platen):

@@ -21,6 +21,8 @@ import json
 import numpy as np
 import pytest
 
+from mpm_cases import run_scene
+
 from solver.examples import DEFAULT_DIR
 
 RHO, G, HEIGHT, WIDTH = 1000.0, 9.81, 1.0, 0.5
@@ -35,10 +37,7 @@ def still_scene():
 
 @pytest.fixture(scope="module")
 def column(tmp_path_factory):
-    from mpm_cases import Case
-
-    from solver import run
-    return Case(run(still_scene(), tmp_path_factory.mktemp("still") / "column"))
+    return run_scene(still_scene(), tmp_path_factory.mktemp("still") / "column")
 
 
 def test_hydrostatic_pressure(column):

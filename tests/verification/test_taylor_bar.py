@@ -16,6 +16,7 @@ and a difference of two runs to two.
 """
 import pytest
 
+from mpm_cases import run_scene
 from taylor_bar import END, EXPERIMENT, REVIEW, error_measure, measure, taylor_scene
 
 CELL, PPC = 0.4e-3, 2
@@ -25,9 +26,7 @@ TLMPM_CELL, TLMPM_SLOW_CELL = 0.4e-3, 0.2e-3   # one particle per cell
 
 
 def run_bar(tmp_path_factory, cell, ppc, formulation="ulmpm"):
-    from mpm_cases import Case
-    from solver import run
-    return Case(run(taylor_scene(cell, ppc, formulation=formulation), tmp_path_factory.mktemp("taylor")))
+    return run_scene(taylor_scene(cell, ppc, formulation=formulation), tmp_path_factory.mktemp("taylor"))
 
 
 @pytest.fixture(scope="module")
@@ -106,12 +105,9 @@ def test_without_the_rate_term_the_bar_has_the_experiment_s_length(tmp_path):
     experiment (measured 16.20 mm at this cell, 16.07 at 0.1 mm) and the face 7-8 % wide
     (14.48 mm; [R] Table 6's own MPM: 14.4): the rate term trades the length for the diameter
     (docs/benchmarks.md, "Taylor bar")."""
-    from mpm_cases import Case
-
-    from solver import run
     scene = taylor_scene(CELL, PPC)
     scene["materials"]["copper"] = {**scene["materials"]["copper"], "C": 0.0}
-    case = Case(run(scene, tmp_path / "no-rate"))
+    case = run_scene(scene, tmp_path / "no-rate")
     assert case.result.status == "complete"
     m = measure(case.frame(-1), CELL / PPC)
     assert abs(m["L"] - EXPERIMENT["L"]) / EXPERIMENT["L"] <= 0.02

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from mpm_cases import centre_of_mass_velocity
+from mpm_cases import centre_of_mass_velocity, run_scene
 
 H, PPC, RHO, V = 0.05, 2, 1000.0, 0.1
 EXACT_CONTACT = (0.6 * math.sqrt(2) - 0.4) / (2 * math.sqrt(2) * V)   # 1.5858 s
@@ -29,10 +29,7 @@ def two_disks(flip_ratio=1.0, end=3.5):
 
 @pytest.fixture(scope="module")
 def disks(tmp_path_factory):
-    from solver import run
-
-    from mpm_cases import Case
-    return Case(run(two_disks(), tmp_path_factory.mktemp("disks")))
+    return run_scene(two_disks(), tmp_path_factory.mktemp("disks"))
 
 
 def test_initial_kinetic_energy_is_the_discrete_value(disks):
@@ -84,12 +81,9 @@ def test_total_energy_is_conserved_with_musl_flip(disks):
 
 
 def test_total_energy_is_conserved_throughout_with_a_hyperelastic_material(tmp_path):
-    from solver import run
-    from mpm_cases import Case
-
     scene = two_disks(end=2.6)
     scene["materials"]["rubber"]["model"] = "neo_hookean"
-    s = Case(run(scene, tmp_path)).series()
+    s = run_scene(scene, tmp_path).series()
     drift = np.abs(s["total_energy"] - s["total_energy"][0]) / s["total_energy"][0]
     assert drift.max() < 0.02
 
