@@ -54,11 +54,9 @@ def gather_2d(dt, inv_dx, nx, x, v, C, grid_mom, p):
 
 @njit(cache=True, inline="always")
 def own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom):
-    """Thread t's nodal arrays: the grid itself for t = 0 (zeroed before the threads' loop),
-    else its own copy, zeroed here."""
-    if t == 0:
-        return grid_mass, grid_mom
-    gm, gp = copies_mass[t - 1], copies_mom[t - 1]
+    """Thread t's nodal arrays, zeroed: the grid itself for t = 0, else its own copy (so the
+    zeroing runs in the threads, as solver/threads.py's `own_zeroed`)."""
+    gm, gp = (grid_mass, grid_mom) if t == 0 else (copies_mass[t - 1], copies_mom[t - 1])
     gm[:] = 0.0
     gp[:, :] = 0.0
     return gm, gp
@@ -128,8 +126,6 @@ def p2g_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom, 
     """The 2D step's P2G: each thread its block of particles into its own nodal arrays."""
     n = x.shape[0]
     threads = copies_mass.shape[0] + 1
-    grid_mass[:] = 0.0
-    grid_mom[:, :] = 0.0
     for t in prange(threads):
         gm, gp = own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom)
         for p in range((n * t) // threads, (n * (t + 1)) // threads):
@@ -153,8 +149,6 @@ def step_3d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom,
     n = x.shape[0]
     nxy = nx * nx
     threads = copies_mass.shape[0] + 1
-    grid_mass[:] = 0.0
-    grid_mom[:, :] = 0.0
     aff = np.empty((threads, 4, 3, 3))   # [t, 0]: each thread's 3x3 on cache lines of its own
     for t in prange(threads):
         gm, gp = own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom)
@@ -275,8 +269,6 @@ def step_mpm88(dt, inv_dx, nx, gravity, bulk, bound, x, v, C, J, mass, vol, grid
     dx = 1.0 / inv_dx
     n = x.shape[0]
     threads = copies_mass.shape[0] + 1
-    grid_mass[:] = 0.0
-    grid_mom[:, :] = 0.0
     for t in prange(threads):
         gm, gp = own_zeroed(t, grid_mass, grid_mom, copies_mass, copies_mom)
         for p in range((n * t) // threads, (n * (t + 1)) // threads):

@@ -48,8 +48,6 @@ def fused_2d(dt, inv_dx, nx, x, v, C, F, mass, vol, lam, mu, grid_mass, grid_mom
     threads = copies_mass.shape[0] + 1
     for node in prange(grid_mass.shape[0]):
         node_velocity_2d(node, grid_mass, grid_mom, copies_mass, copies_mom)
-    next_mass[:] = 0.0
-    next_mom[:, :] = 0.0
     for t in prange(threads):
         gm, gp = own_zeroed(t, next_mass, next_mom, next_copies_mass, next_copies_mom)
         for p in range((n * t) // threads, (n * (t + 1)) // threads):
