@@ -16,17 +16,7 @@ import numpy as np
 import pytest
 
 import live_scenes
-from mpm_client import (
-    AsyncClient,
-    Client,
-    Conflict,
-    JobCancelled,
-    JobFailed,
-    NotFound,
-    ServiceUnavailable,
-    TooLarge,
-    ValidationFailed,
-)
+from mpm_client import AsyncClient, Client, errors
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -61,13 +51,13 @@ def test_validation_errors_name_every_path_and_create_no_job(live_client, exampl
     scene = live_scenes.invalid(example)
     material = next(iter(scene["materials"]))
     expected = {"bodies[0].geometry.radius", f"materials.{material}.poisson_ratio"}
-    with pytest.raises(ValidationFailed) as caught:
+    with pytest.raises(errors.ValidationFailed) as caught:
         live_client.validate(scene)
     assert {e["path"] for e in caught.value.errors} == expected
     assert all(e["message"] for e in caught.value.errors)
 
     before = [job.id for job in live_client.jobs()]
-    with pytest.raises(ValidationFailed) as caught:
+    with pytest.raises(errors.ValidationFailed) as caught:
         live_client.submit(scene)
     assert {e["path"] for e in caught.value.errors} == expected
     assert [job.id for job in live_client.jobs()] == before  # a rejected job never half-exists
@@ -108,12 +98,12 @@ def test_a_multi_frame_result_round_trip(live_client, example, tmp_path):
     first = job.preview(frame=0, field="von_mises")
     assert last.startswith(PNG_SIGNATURE) and first.startswith(PNG_SIGNATURE) and first != last
     assert (tmp_path / "last.png").read_bytes() == last
-    with pytest.raises(ValidationFailed) as caught:
+    with pytest.raises(errors.ValidationFailed) as caught:
         job.preview(frame=99)
     assert caught.value.errors[0]["path"] == "frame"
 
     job.delete()
-    with pytest.raises(NotFound):
+    with pytest.raises(errors.NotFound):
         job.refresh()
 
 
@@ -136,30 +126,30 @@ def test_jobs_are_listed_newest_first_over_pages_and_filtered(live_client, examp
 def test_cancel_a_running_job_keeps_its_partial_result(live_client, example, tmp_path):
     job = live_client.submit(live_scenes.long(example))
     wait_running(job)
-    with pytest.raises(Conflict):
+    with pytest.raises(errors.Conflict):
         job.delete()  # not finished yet
-    with pytest.raises(Conflict):
+    with pytest.raises(errors.Conflict):
         job.download(tmp_path / "early.h5")
     assert not (tmp_path / "early.h5").exists()
 
     job.cancel()
-    with pytest.raises(JobCancelled):
+    with pytest.raises(errors.JobCancelled):
         job.wait(timeout=60, poll=0.2, progress=False)
     assert job.record.status == "cancelled" and job.record.progress < 1.0
-    with pytest.raises(Conflict):
+    with pytest.raises(errors.Conflict):
         job.cancel()  # already finished
 
     with h5py.File(job.download(tmp_path / "partial.h5"), "r") as result:
         assert result.attrs["status"] == "partial"
         assert len(result["frames"]) >= 1
     job.delete()
-    with pytest.raises(NotFound):
+    with pytest.raises(errors.NotFound):
         live_client.job(job.id)
 
 
 def test_a_blown_up_run_raises_job_failed_with_the_solver_diagnostic(live_client, example):
     job = live_client.submit(live_scenes.unstable(example))
-    with pytest.raises(JobFailed) as caught:
+    with pytest.raises(errors.JobFailed) as caught:
         job.wait(timeout=120, poll=0.2, progress=False)
     assert caught.value.status == "failed"
     assert "unstable" in caught.value.diagnostic and "particle" in caught.value.diagnostic
@@ -167,11 +157,11 @@ def test_a_blown_up_run_raises_job_failed_with_the_solver_diagnostic(live_client
 
 
 def test_unknown_job_and_oversized_request_are_typed(live_client, example):
-    with pytest.raises(NotFound):
+    with pytest.raises(errors.NotFound):
         live_client.job(str(uuid.uuid4()))
     scene = live_scenes.quick(example)
     scene["name"] = "x" * 300_000  # over the service's MPM_MAX_BODY_BYTES
-    with pytest.raises(TooLarge):
+    with pytest.raises(errors.TooLarge):
         live_client.submit(scene)
 
 
@@ -180,7 +170,7 @@ def test_a_closed_port_is_service_unavailable():
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]  # nothing listens once the probe is closed
     with Client(f"http://127.0.0.1:{port}", retries=1, backoff=0.01) as client:
-        with pytest.raises(ServiceUnavailable, match=f"cannot reach the service at http://127.0.0.1:{port}"):
+        with pytest.raises(errors.ServiceUnavailable, match=f"cannot reach the service at http://127.0.0.1:{port}"):
             client.examples()
     unreachable = mpm("jobs", "--server", f"http://127.0.0.1:{port}")
     assert unreachable.returncode == 1 and f"http://127.0.0.1:{port}" in unreachable.stderr
@@ -266,11 +256,11 @@ def test_a_sweep_from_the_sdk_waits_and_tables(live_client, example, capsys):
                              "succeeded"]
         assert float(cells[6]) == pytest.approx(job["energies"]["total"], rel=1e-5)
     assert sweep.id in [s.id for s in live_client.sweeps()]
-    with pytest.raises(ValidationFailed) as caught:
+    with pytest.raises(errors.ValidationFailed) as caught:
         live_client.sweep(scene, {YOUNG: [1000, 0]})
     assert caught.value.errors[0]["path"] == f"parameters.{YOUNG}"
     sweep.delete()
-    with pytest.raises(NotFound):
+    with pytest.raises(errors.NotFound):
         live_client.get_sweep(sweep.id)
 
 
