@@ -78,8 +78,10 @@ class Fluid:
     stress_sets_wave_speed = True   # (a stress update put off leaves the last one's: solver/step/fused.py)
 
     def update_stress(self, particles, sl: slice, dt: float) -> None:
-        self.wave_speed = _update(axes(particles.dimension), flag(self.gamma == 1.0), particles.L[sl], particles.volume[sl], particles.volume0[sl], particles.stress[sl],
-                                  self.density, self.K, self.gamma, self.mu, self.min_pressure)
+        L = particles.L   # (n, 3, 3) in an axisymmetric run: its hoop rate too
+        self.wave_speed = _update(axes(L.shape[1]), flag(self.gamma == 1.0), L[sl], particles.volume[sl],
+                                  particles.volume0[sl], particles.stress[sl], self.density, self.K, self.gamma,
+                                  self.mu, self.min_pressure)
 
     def stress_lines(self, dim: int) -> tuple[str, ...]:
         """The in-plane stress as the fused P2G forms it from L_p and V0_p / V_p (solver/fused_template.py

@@ -47,7 +47,7 @@ def _energy(stress, volume, lam, mu, out):
 
 class LinearElastic(IsotropicElastic):
     def update_stress(self, particles, sl: slice, dt: float) -> None:
-        _update(axes(particles.dimension), particles.L[sl], particles.stress[sl], dt, self.lam, self.mu)
+        _update(axes(particles.L.shape[1]), particles.L[sl], particles.stress[sl], dt, self.lam, self.mu)
 
     def stress_update_lines(self, dim: int) -> tuple[str, ...]:
         """This update as the fused G2P runs it, right after it forms L_p (solver/fused_template.py

@@ -52,7 +52,7 @@ def _energy(F, volume0, lam, mu, out):
 class NeoHookean(IsotropicElastic):
     total_stress = True   # sigma(F) each step: the thermal pressure 3 K alpha (T - T0), linearised
     def update_stress(self, particles, sl: slice, dt: float) -> None:
-        _update(axes(particles.dimension), particles.F[sl], particles.stress[sl], self.lam, self.mu)
+        _update(axes(particles.F.shape[1]), particles.F[sl], particles.stress[sl], self.lam, self.mu)
 
     def stress_lines(self, dim: int) -> tuple[str, ...]:
         """The in-plane stress as the fused P2G forms it from F_p (solver/fused_template.py
