@@ -4,10 +4,15 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-
-from reference_mpm2d import ReferenceMPM2D  # noqa: E402
-from throughput import block_scene  # noqa: E402
+# benchmarks/ on the path only while these import: left there, its service.py would hide the
+# service package from every later test in the same worker (test_docs loads every `mpm` command)
+BENCHMARKS = str(Path(__file__).resolve().parents[2] / "benchmarks")
+sys.path.insert(0, BENCHMARKS)
+try:
+    from reference_mpm2d import ReferenceMPM2D
+    from throughput import block_scene
+finally:
+    sys.path.remove(BENCHMARKS)
 
 from solver.scene_checks import load_scene  # noqa: E402
 from solver.stepper import ExplicitMPM  # noqa: E402
