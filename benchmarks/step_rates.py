@@ -29,7 +29,10 @@ ROOT = Path(__file__).resolve().parent.parent
 MEASURE = r"""
 import json, sys, time
 sys.path.insert(0, ".")
-from solver.scene import load_scene   # (in later commits an alias of solver.scene_checks')
+try:
+    from solver.scene_checks import load_scene
+except ImportError:   # commits before the checks left the schema
+    from solver.scene import load_scene
 try:
     from solver.runner import make_simulation
 except ImportError:

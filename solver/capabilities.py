@@ -5,7 +5,9 @@ feature listed there but not here is rejected at validation with a
 "not supported yet" error naming the field. An issue that implements a feature
 adds it here in the same change, or, for materials, shape functions and output
 fields of material state, registers it: those sets are the registries' names
-(solver.materials, solver.shape), read each time they are used.
+(solver.materials, solver.shape hand them over when imported), read each time they
+are used. This module imports nothing of the solver: the schema and the registries
+read it.
 """
 
 from collections.abc import Callable, Iterable, Iterator, Set
@@ -39,21 +41,32 @@ ROW_BLOCK = 1 << 16
 class RegisteredNames(Set):
     """The current names of a registry, as a read-only set (`in`, `|`, `-` give frozensets).
 
-    A live view rather than a frozenset taken at import: a material registered later
-    is supported at once. Tests replace it with a plain set to simulate a feature
-    that is not supported yet; monkeypatch puts this view back afterwards."""
+    The registry that owns the names (solver.materials, solver.shape) hands over its reader
+    when it is imported (`read_from`): this module sits below the registries and imports none
+    of them. A live view rather than a frozenset taken at import: a material registered later
+    is supported at once. Tests replace it with a plain set to simulate a feature that is not
+    supported yet; monkeypatch puts this view back afterwards."""
 
-    def __init__(self, names: Callable[[], Iterable[str]]):
+    def __init__(self, owner: str):
+        self._owner = owner
+        self._names: Callable[[], Iterable[str]] | None = None
+
+    def read_from(self, names: Callable[[], Iterable[str]]) -> None:
         self._names = names
 
+    def _current(self) -> tuple[str, ...]:
+        if self._names is None:   # every reader of the scene imports the registries first
+            raise LookupError(f"no names yet: {self._owner} gives them when it is imported")
+        return tuple(self._names())
+
     def __contains__(self, name: object) -> bool:
-        return name in frozenset(self._names())
+        return name in frozenset(self._current())
 
     def __iter__(self) -> Iterator[str]:
-        return iter(tuple(self._names()))
+        return iter(self._current())
 
     def __len__(self) -> int:
-        return len(frozenset(self._names()))
+        return len(frozenset(self._current()))
 
     @classmethod
     def _from_iterable(cls, names: Iterable[str]) -> frozenset[str]:
@@ -63,29 +76,18 @@ class RegisteredNames(Set):
         return f"RegisteredNames({sorted(self)})"
 
 
-# The registries import the scene's building blocks (solver/schema.py), which read
-# this module: they are imported when a set is read, not here.
-
-def _material_models() -> Iterable[str]:
-    from solver import materials
-    return materials.names()
-
-
-def _shape_functions() -> Iterable[str]:
-    from solver import shape
-    return shape.REGISTRY
+def with_scene_fields(material_fields: Callable[[], Iterable[str]]) -> Callable[[], frozenset[str]]:
+    """A reader of every output field: the scene's own and the materials' state."""
+    def names() -> frozenset[str]:
+        outputs = frozenset(material_fields())
+        taken = sorted(outputs & SCENE_FIELDS)
+        if taken:   # a material's state would hide a field of every scene, or the other way round
+            raise ValueError(f"material state declared as output fields that every scene has: {taken}")
+        return SCENE_FIELDS | outputs
+    return names
 
 
-def _output_fields() -> Iterable[str]:
-    from solver import materials
-    outputs = materials.output_fields()
-    taken = sorted(outputs.keys() & SCENE_FIELDS)
-    if taken:   # a material's state would hide a field of every scene, or the other way round
-        raise ValueError(f"material state declared as output fields that every scene has: {taken}")
-    return SCENE_FIELDS | outputs.keys()
-
-
-MATERIAL_MODELS = RegisteredNames(_material_models)
-SHAPE_FUNCTIONS = RegisteredNames(_shape_functions)
+MATERIAL_MODELS = RegisteredNames("solver.materials")
+SHAPE_FUNCTIONS = RegisteredNames("solver.shape")
 # Output fields the solver can write per particle (id, body and mass are always written).
-OUTPUT_FIELDS = RegisteredNames(_output_fields)
+OUTPUT_FIELDS = RegisteredNames("solver.materials")

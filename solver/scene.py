@@ -978,18 +978,7 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     ])
     if grid_ok and scene.grid.lower is not None and scene.grid.upper is not None:
         grid_ok = _grid_extent_ok(scene, problems)
-    if scene.axisymmetric and scene.grid.lower is not None and scene.grid.lower[0] < 0:
-        problems.append(("grid.lower[0]", "must be >= 0 in an axisymmetric scene (x is the radius r)"))
-    if scene.method.formulation == "ulmpm":
-        for name in ("lower", "upper"):
-            if getattr(scene.grid, name) is None:
-                problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
-                grid_ok = False
-
-    if scene.axisymmetric and scene.method.formulation == "tlmpm" and scene.grid.lower is None:
-        # (tlmpm's default grid is the bodies' box padded by two cells: it would reach r < 0)
-        problems.append(("grid.lower", "required with formulation 'tlmpm' in an axisymmetric scene (with "
-                         "lower[0] = 0 the axis r = 0 is a grid line whose nodes get v_r = 0)"))
+    grid_ok = _grid_corners_given(scene, problems) and grid_ok
 
     length_ok("gravity", scene.gravity)
     if length_ok("body_force", scene.body_force):
@@ -1035,6 +1024,23 @@ def _cross_checks(scene: Scene) -> list[tuple[str, str]]:
     if grid_ok:
         problems += slab_problems(scene)
     return problems
+
+
+def _grid_corners_given(scene: Scene, problems: list[tuple[str, str]]) -> bool:
+    """False where the formulation needs a grid corner the scene leaves out."""
+    given = True
+    if scene.axisymmetric and scene.grid.lower is not None and scene.grid.lower[0] < 0:
+        problems.append(("grid.lower[0]", "must be >= 0 in an axisymmetric scene (x is the radius r)"))
+    if scene.method.formulation == "ulmpm":
+        for name in ("lower", "upper"):
+            if getattr(scene.grid, name) is None:
+                problems.append((f"grid.{name}", "required for formulation 'ulmpm'"))
+                given = False
+    if scene.axisymmetric and scene.method.formulation == "tlmpm" and scene.grid.lower is None:
+        # (tlmpm's default grid is the bodies' box padded by two cells: it would reach r < 0)
+        problems.append(("grid.lower", "required with formulation 'tlmpm' in an axisymmetric scene (with "
+                         "lower[0] = 0 the axis r = 0 is a grid line whose nodes get v_r = 0)"))
+    return given
 
 
 def _grid_extent_ok(scene: Scene, problems: list[tuple[str, str]]) -> bool:
@@ -1491,14 +1497,14 @@ def _message(error: dict) -> str:
     return message.replace("Input should be", "must be")
 
 
-# `from solver.scene import load_scene, Limits, MACHINE_LIMITS` is how users and
-# scripts have loaded a scene since the first wave; those names live in solver/scene_checks.py, above this module, and are
-# found there only when asked for (PEP 562), so that importing the schema imports no checks.
+# Until the checks moved above the schema, `from solver.scene import load_scene` loaded a scene;
+# the schema imports nothing that reads it back, so an old import is told where the name is now
+# (an ImportError: `from ... import` would replace an AttributeError's message with its own).
 _CHECKS = ("load_scene", "Limits", "MACHINE_LIMITS", "COUNT_FACTOR")
 
 
 def __getattr__(name: str):
     if name in _CHECKS:
-        from solver import scene_checks
-        return getattr(scene_checks, name)
+        raise ImportError(f"solver.scene.{name} is now solver.scene_checks.{name} "
+                          f"(from solver.scene_checks import {name})", name=name)
     raise AttributeError(f"module 'solver.scene' has no attribute {name!r}")

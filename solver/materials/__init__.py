@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from importlib import import_module
 
+from solver import capabilities
 from solver.materials.registry import (
     REGISTRY,
     MaterialType,
@@ -51,6 +52,9 @@ __all__ = ["REGISTRY", "MaterialType", "StateVariable", "create", "init_particle
 # (error messages name the models in this order).
 BUILTIN = ("linear_elastic", "neo_hookean", "j2_plasticity", "johnson_cook", "drucker_prager", "mohr_coulomb",
            "modified_cam_clay", "fluid", "ideal_gas", "rigid")
+
+capabilities.MATERIAL_MODELS.read_from(names)
+capabilities.OUTPUT_FIELDS.read_from(capabilities.with_scene_fields(output_fields))
 
 for _name in BUILTIN:
     register(import_module(f"solver.materials.{_name}").MATERIAL)

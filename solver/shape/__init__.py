@@ -45,6 +45,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from solver import capabilities
 from solver.shape.registry import ShapeFunction
 
 __all__ = ["BUILTIN", "REGISTRY", "ShapeFunction", "evaluate", "failure", "get", "prepare", "support_needed"]
@@ -58,6 +59,7 @@ REGISTRY: dict[str, ShapeFunction] = {
     for module in BUILTIN
     for declared in import_module(f"solver.shape.{module}").SHAPE_FUNCTIONS
 }
+capabilities.SHAPE_FUNCTIONS.read_from(REGISTRY.keys)
 
 
 def get(name: str) -> SimpleNamespace:
