@@ -1,7 +1,7 @@
 """The two-phase (saturated soil) part of a scene, read without numba: which materials
 carry a pore fluid, the limits the fluid puts on the explicit step, and the validation
 rules of `pore_fluid`, `initial_pore_pressure` and the `pore_pressure` conditions
-(solver/scene.py calls `pore_fluid_problems`; the physics is solver/pore_fluid.py).
+(solver/scene_rules.py calls `pore_fluid_problems`; the physics is solver/pore_fluid.py).
 
 Two limits (solver/stability.py takes the smaller with the others):
 - the P-wave of the undrained mixture, c = sqrt(c_dry^2 + (K_w / n) / rho): the fluid
@@ -58,7 +58,7 @@ def undrained_wave_speed(material, dry: float) -> float:
     return math.sqrt(dry * dry + material.pore_fluid.storage_modulus / density)
 
 
-def pore_fluid_problems(scene, condition_class, length_ok) -> list[tuple[str, str]]:
+def pore_fluid_problems(scene, length_ok) -> list[tuple[str, str]]:
     """The pore fluid's materials, bodies and conditions, and what the two-phase step does not support."""
     problems: list[tuple[str, str]] = []
     for name, material in scene.materials.items():
@@ -81,7 +81,7 @@ def pore_fluid_problems(scene, condition_class, length_ok) -> list[tuple[str, st
                 problems.append((path, f"a hydrostatic pore pressure needs gravity along {'xyz'[vertical]} "
                                        f"(the height axis) or none (gravity is {scene.gravity})"))
     for i, condition in enumerate(scene.boundary_conditions):
-        if not isinstance(condition, condition_class):
+        if condition.type != "pore_pressure":
             continue
         path = f"boundary_conditions[{i}]"
         if not wet:

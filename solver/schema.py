@@ -154,6 +154,15 @@ class ElasticMaterial(BaseMaterial):
         return math.sqrt((lam + 2 * mu) / self.density)
 
 
+# Variables allowed in expressions; X, Y, Z are reference (initial) coordinates.
+SPACE_VARIABLES = ("x", "y", "z")
+TIME_VARIABLES = ("t",)
+BODY_FORCE_VARIABLES = ("x", "y", "z", "X", "Y", "Z", "t")
+AXIS_OF_VARIABLE = {"x": 0, "y": 1, "z": 2, "X": 0, "Y": 1, "Z": 2}
+# output.frames when the scene leaves it out; a scene may always ask for this many
+DEFAULT_FRAMES = 51
+
+
 # Counts (cells, steps, frames) derived from a scene's floats: past this they are "more than
 # anything a limit allows", so an absurd ratio (1e308 / 1e-308, or an infinite extent) stays
 # a Python int that the limits compare, never an OverflowError in math.ceil / math.floor.

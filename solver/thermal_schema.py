@@ -1,7 +1,7 @@
 """The thermal part of a scene, read without numba (the scene's validation and the
 solver both use it): which materials conduct or expand, the explicit conduction
 step's stability limit, and the validation rules of the thermal keys and
-boundary conditions (solver/scene.py calls `thermal_problems`).
+boundary conditions (solver/scene_rules.py calls `thermal_problems`).
 
 The limit of the forward-Euler conduction step on a grid of cells h_a, with the
 lumped capacity C_I, is dt <= 1 / (2 kappa sum_a 1/h_a^2), kappa = k / (rho c):
@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import math
 
-from solver.schema import ElasticMaterial, fmt
+from solver.schema import ElasticMaterial
 
 THERMAL_KEYS = ("thermal_conductivity", "specific_heat", "thermal_expansion")
+# the `type` of the scene's thermal boundary conditions (solver/scene.py)
+THERMAL_CONDITIONS = ("temperature", "heat_flux", "convection")
 
 
 def conducts(scene) -> bool:
@@ -53,7 +55,7 @@ def conduction_time_step(scene) -> tuple[float, str] | None:
     return best
 
 
-def thermal_problems(scene, condition_classes, length_ok) -> list[tuple[str, str]]:
+def thermal_problems(scene, length_ok) -> list[tuple[str, str]]:
     """The thermal keys of the materials and the thermal boundary conditions."""
     problems: list[tuple[str, str]] = []
     for name, material in scene.materials.items():
@@ -69,7 +71,7 @@ def thermal_problems(scene, condition_classes, length_ok) -> list[tuple[str, str
                                                           "(the solid models only)"))
     heated = conducts(scene)
     for i, condition in enumerate(scene.boundary_conditions):
-        if not isinstance(condition, condition_classes):
+        if condition.type not in THERMAL_CONDITIONS:
             continue
         path = f"boundary_conditions[{i}]"
         if not heated:

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from solver import capabilities, fields, materials, run, shape
+from solver import scene as solver_scene
 from solver.materials import MaterialType, StateVariable
 from solver.results import read_frame, read_series
 from solver.scene import Scene, SceneError
@@ -201,6 +202,11 @@ class TestRegistration:
         imported_checks, message = out.stdout.splitlines()
         assert imported_checks == "False"
         assert "from solver.scene_checks import load_scene" in message
+
+    def test_the_scene_module_still_names_the_registered_materials_schemas(self):
+        assert solver_scene.NeoHookean is materials.REGISTRY["neo_hookean"].schema
+        with pytest.raises(AttributeError, match="no attribute 'NoSuchModel'"):
+            solver_scene.NoSuchModel
 
 
 class TestBuiltFromTheRegistries:
