@@ -1,6 +1,7 @@
 """The documentation against the code: no doc calls an implemented feature "not supported
 yet", docs/cli.md lists exactly the commands `mpm` has and the examples `mpm examples`
-lists, and the docs point only to files that are in the repository."""
+lists, the docs point only to files that are in the repository, and each table of
+docs/benchmarks.md names the script or test whose output it is."""
 from __future__ import annotations
 
 import re
@@ -123,3 +124,23 @@ def test_docs_point_only_to_files_in_the_repository(doc):
         if not any((ROOT / candidate).exists() for candidate in candidates):
             missing.append(path)
     assert not missing, f"{doc.name} points to files that are not in the repository: {missing}"
+
+
+# A script or test that produces a table's figures, named in the table's section.
+PRODUCER = re.compile(r"(?<![\w/])((?:benchmarks|tests)/[\w/]+\.py)")
+
+
+def table_sections(path: Path) -> list[tuple[str, str]]:
+    """(heading, text) of each section of `path` (split at its headings) that holds a table."""
+    sections = re.split(r"^(#{1,4} .*)$", path.read_text(encoding="utf-8"), flags=re.MULTILINE)
+    return [(heading, text) for heading, text in zip(sections[1::2], sections[2::2])
+            if re.search(r"^\|.*\|\s*\n\|[-| :]+\|\s*$", text, flags=re.MULTILINE)]
+
+
+@pytest.mark.parametrize("heading, text", [pytest.param(heading, text, id=heading.lstrip("# ")[:40])
+                                           for heading, text in table_sections(ROOT / "docs" / "benchmarks.md")])
+def test_every_benchmark_table_names_the_script_that_gives_it(heading, text):
+    """docs/benchmarks.md holds the figures that scripts print: a table whose section names no
+    script under benchmarks/ or tests/ (that exists) could not be checked or brought up to date."""
+    producers = [name for name in PRODUCER.findall(text) if (ROOT / name).is_file()]
+    assert producers, f"docs/benchmarks.md {heading!r}: a table without the script or test that gives its figures"
