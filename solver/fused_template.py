@@ -681,7 +681,8 @@ def _g2p_row_start(dim: int) -> list[str]:
 def _g2p_row_end(dim: int) -> list[str]:
     """The row's sums into the particle's: the weights factor into x and the outer axes (w =
     wx[i] wo, grad w = (gx[i] wo, wx[i] go1, ...)), so a node's terms are summed along x first
-    and multiplied by the row's outer factor once (G2P 1.10-1.35x: docs/benchmarks.md, eleventh part)."""
+    and multiplied by the row's outer factor once (G2P 1.10-1.35x:
+    `git show 63f7e3a^:docs/benchmarks.md`, "Speed, eleventh part")."""
     wo = _outer(dim)
     return [
         "if mode != KINEMATICS:",
@@ -921,7 +922,7 @@ def _flat_determinant(dim: int) -> str:
 def _g2p_mls(dim: int, contract: bool) -> list[str]:
     """`g2p` for MLS under USL with C_p as L_p (`l_is_c`), quadratic B-splines and no stress
     update, in a loop LLVM vectorises (the nodes gathered for 8 particles at a time with
-    AVX-512; docs/benchmarks.md, issue 18, eighteenth part). What keeps `g2p` scalar and is
+    AVX-512; `git show 63f7e3a^:docs/benchmarks.md`, "Speed, eighteenth part"). What keeps `g2p` scalar and is
     different here: the arrays are flat views (the strides of (n, dim) arrays are read at run
     time); the loop counts from 0 from a start known to be non-negative (from lo, or
     with np.uint64 indices, LLVM "cannot identify array bounds"); the first node is found inline

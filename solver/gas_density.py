@@ -1,4 +1,4 @@
-"""A gas's density from the grid (`ideal_gas` `density_from_grid`, issue 51).
+"""A gas's density from the grid (`ideal_gas` `density_from_grid`).
 
 A gas expands to about one particle per cell (Sod's left plateau: 1.3 of the 3 it started
 with). With linear hats the particles' volumes, V_p = J_p V0_p, then drift away from the

@@ -408,7 +408,8 @@ def external_power(mass, acc, vel):
     Serial, so the same sum for any thread count; one pass without the temporaries
     of the numpy expression, which took 10 % of a two-thread step. One loop per dimension
     and kind of `acc`, constants in each (the component loop unrolled, no select per
-    particle): 1.4-2.1x, the same sum (docs/benchmarks.md, issue 18 twelfth part)."""
+    particle): 1.4-2.1x, the same sum (`git show 63f7e3a^:docs/benchmarks.md`,
+    "Speed, twelfth part")."""
     dim, shared = vel.shape[1], acc.shape[0] == 1
     if shared:
         if dim == 2:

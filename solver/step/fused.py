@@ -180,10 +180,10 @@ class FusedPhases(Phases):
         q_I / m_I for both v_I^t and v~_I^{t+dt}, which equals the unfolded step's to round-off
         except on nodes below the mass cut-off (1e-9 of the lightest particle's mass), where the
         unfolded step drops dt f_I / m_I. What such a node's dt f_I / m_I gives a particle is
-        bounded: with MLS its weight in the gather is below 1e-9 (docs/benchmarks.md, issue 18
-        third part); with quadratic B-splines, at distance d (in cells) inside the stencil's edge,
+        bounded: with MLS its weight in the gather is below 1e-9 (`git show 63f7e3a^:docs/benchmarks.md`,
+        "Speed, third part"); with quadratic B-splines, at distance d (in cells) inside the stencil's edge,
         w ~ d^2 and grad w ~ d / h, so dt f_I / m_I ~ 1 / d and the gather's w v_I ~ d and grad w
-        v_I ~ 1 stay finite (thirteenth part). With linear hats grad w stays 1 / h as w ~ d -> 0,
+        v_I ~ 1 stay finite ("thirteenth part" there). With linear hats grad w stays 1 / h as w ~ d -> 0,
         which is why solver/scene.py refuses APIC with them."""
         sim = self.sim
         quadratic = sim.scene.method.shape_function == "quadratic_bspline"
@@ -216,7 +216,7 @@ class FusedPhases(Phases):
         (memory traffic: the 2D FLIP block's pass took 8 of 75 ns a particle). Not where MUSL's
         KINEMATICS pass is the vectorised `g2p_kinematics` (`splits_kinematics`), which has no
         update: that pass and the material's own were 10 % faster a step on the 2D FLIP block than
-        the scalar pass with the update (docs/benchmarks.md, issue 18, twentieth part)."""
+        the scalar pass with the update (`git show 63f7e3a^:docs/benchmarks.md`, "Speed, twentieth part")."""
         hooks = self.sim.hooks
         musl = self.sim.scene.method.scheme == "musl"
         return (self._has_update_lines and not hooks.after_kinematics and not hooks.after_stress
