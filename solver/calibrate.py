@@ -31,7 +31,7 @@ from pathlib import Path
 
 from solver import fused_scope
 from solver import shape as shape_functions
-from solver.cost import CostModel, ThreadScaling, calibration_path
+from solver.cost import CostModel, calibration_path
 from solver.thread_count import available_cores
 
 REPEAT_SECONDS = 0.1

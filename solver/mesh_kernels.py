@@ -9,7 +9,6 @@ both count the point, nor both miss it, and the crossing count stays right.
 """
 from __future__ import annotations
 
-import numpy as np
 from solver.jit import njit
 
 

@@ -23,12 +23,12 @@ import math
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, Strict, field_validator, model_serializer, model_validator
+from pydantic import Field, Strict, model_serializer, model_validator
 
 from solver.initial_stress import vertical_axis
 from solver.materials.drucker_prager import FRICTIONAL_STATE
 from solver.materials.registry import MaterialType, StateVariable
-from solver.schema import BaseMaterial, Positive, fmt, problems_at, scene_error
+from solver.schema import BaseMaterial, Positive, fmt, problems_at
 
 PRECONSOLIDATION = "preconsolidation_pressure"
 # the model's strain energy: V sigma' : d eps^e summed over the steps (kernels/modified_cam_clay.py)
