@@ -49,11 +49,13 @@ import numpy as np
 from solver.jit import njit, prange
 
 from solver import shape
+from solver.shape.kernels import linear, quadratic_bspline
+# the generated kernels' names for the quadratic B-spline's 1D weights and its grid-end allowance
+from solver.shape.kernels.quadratic_bspline import TOUCH as _TOUCH, weights_1d as _quadratic  # noqa: F401
 # which scenes the fused kernels run: decided without numba (the run-time estimates read it too)
 from solver.fused_scope import FUSED_SHAPES, supports  # noqa: F401
 from solver.threads import add_copies
 
-_TOUCH = 1e-9   # as solver/shape/quadratic_bspline.py: round-off allowance at h/2 from a grid end
 
 USL, REMAP, KINEMATICS = 0, 1, 2   # what a g2p kernel does, see the module docstring
 
@@ -99,35 +101,24 @@ def inverse_d(apic_d: float, inv_h: np.ndarray) -> np.ndarray:
 
 # -- weights along one axis ------------------------------------------------------
 
-# fastmath=False, said: a callee that does not set it inherits its caller's, but is compiled
-# and cached once per signature, without the flags in the key, so the contracted weights of
-# the first MPM_FMA=1 kernel to compile it were served to every MPM_FMA=0 kernel after it, in
-# later processes too (the quadratic B-spline regression cases failed so). Never contracted,
-# the weights are the same bits for both. (inline="always" would give each kernel its own
-# copy, but made the kernels' compile several times slower.)
+# fastmath=False like the functions it calls (solver/shape/kernels/quadratic_bspline.py says
+# why). (inline="always" would give each kernel its own copy, but made the kernels' compile
+# several times slower.)
 @njit(cache=True, fastmath=False)
 def _axis(S, x, lower, inv_h, cells):
-    """First node i, position in cells from it f, 1D weights and derivatives (times
-    inv_h) of a position along one axis, exactly as solver/shape/linear.py and
-    quadratic_bspline.py compute them; `ok` is False outside the grid (or NaN).
+    """First node i, position in cells from it f, 1D weights and derivatives (times inv_h) of a
+    position along one axis, from the shape modules' own 1D functions (solver/shape/kernels/
+    linear.py, quadratic_bspline.py); `ok` is False outside the grid (or NaN), with i = 0.
     Node i + j lies at (j - f) h from the particle."""
     s = (x - lower) * inv_h
     if S == 2:
-        ok = s >= 0.0 and s <= cells
-        i = min(int(s), cells - 1) if ok else 0
-        f = s - i
-        return ok, i, f, (1.0 - f, f, 0.0), (-inv_h, inv_h, 0.0)
-    ok = s >= 0.5 - _TOUCH and s <= cells - 0.5 + _TOUCH
-    i = min(max(int(s - 0.5), 0), cells - 2) if ok else 0
-    f = s - i
-    return ok, i, f, _quadratic(f), (-(1.5 - f) * inv_h, -2.0 * (f - 1.0) * inv_h, (f - 0.5) * inv_h)
-
-
-@njit(cache=True, fastmath=False)
-def _quadratic(f):
-    """The quadratic B-spline's weights on the nodes at -f, 1 - f, 2 - f cells (a function of its
-    own so that the vectorised G2P calls the very expressions `_axis` does, uncontracted)."""
-    return 0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2
+        i = linear.first_node(s, cells)
+        f = s - max(i, 0)
+        (w0, w1), (g0, g1) = linear.weights_1d(f), linear.gradients_1d(inv_h)
+        return i >= 0, max(i, 0), f, (w0, w1, 0.0), (g0, g1, 0.0)
+    i = quadratic_bspline.first_node(s, cells)
+    f = s - max(i, 0)
+    return i >= 0, max(i, 0), f, _quadratic(f), quadratic_bspline.gradients_1d(f, inv_h)
 
 
 # twin=True: a run on one thread calls the copies' serial twin through them (solver/jit.py).

@@ -6,7 +6,7 @@ from solver import shape
 from solver.pore_fluid_schema import saturated
 from solver.thermal_schema import conducts
 
-FUSED_SHAPES = frozenset({"linear", "quadratic_bspline"})   # the 1D weights `_axis` writes out
+FUSED_SHAPES = frozenset({"linear", "quadratic_bspline"})   # the shape modules whose 1D weights `fused._axis` calls
 
 
 def supports(scene) -> bool:

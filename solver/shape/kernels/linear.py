@@ -12,6 +12,30 @@ from solver.jit import njit, prange
 from solver.threads import block_bounds, first_of
 
 
+# The 1D functions: the formula both backends evaluate (this module's kernel, and the fused
+# kernels through solver/fused.py `_axis`); fastmath=False for the reason
+# quadratic_bspline.py gives.
+@njit(cache=True, fastmath=False)
+def first_node(s, cells):
+    """The first of the two nodes of a position s (in cells from the grid's lower end) along
+    one axis of `cells` cells; -1 outside the grid (or NaN)."""
+    if not (s >= 0.0 and s <= cells):
+        return -1
+    return min(int(s), cells - 1)
+
+
+@njit(cache=True, fastmath=False)
+def weights_1d(f):
+    """The weights on the nodes at -f and 1 - f cells (f in [0, 1])."""
+    return 1.0 - f, f
+
+
+@njit(cache=True, fastmath=False)
+def gradients_1d(inv_h):
+    """d(weights_1d)/dx on the same nodes."""
+    return -inv_h, inv_h
+
+
 # Hat functions keep a kernel of their own instead of the shared one of tensor.py: their
 # per-axis work is so small that calling a separate axis function made the weights 1.45x
 # slower (3D, 21 -> 31 ns a particle); every other shape function gained from the shared one.
@@ -35,15 +59,12 @@ def _block(dims, nodes, start, stop, x, lower, inv_h, cells, strides, idx, w, dw
     for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
-            if not (s >= 0.0 and s <= cells[a]):   # also catches NaN
+            i = first_node(s, cells[a])
+            if i < 0:
                 return np.int64(p)
-            i = min(int(s), cells[a] - 1)
-            f = s - i
             base[a] = i
-            w1[a, 0] = 1.0 - f
-            w1[a, 1] = f
-            g1[a, 0] = -inv_h[a]
-            g1[a, 1] = inv_h[a]
+            w1[a, 0], w1[a, 1] = weights_1d(s - i)
+            g1[a, 0], g1[a, 1] = gradients_1d(inv_h[a])
         for k in range(nk):
             node = 0
             wk = 1.0

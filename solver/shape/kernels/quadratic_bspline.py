@@ -13,22 +13,45 @@ from solver.jit import njit
 from solver.shape.kernels import tensor
 
 
-_TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
+TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
+
+
+# The 1D functions below are the formula both backends evaluate: this module's `axis` (the
+# general backend, through tensor.py) and the fused kernels (solver/fused.py `_axis`, and the
+# vectorised passes through `weights_1d`). fastmath=False: a callee otherwise inherits its
+# caller's flags but is cached once per signature, so a contracted copy compiled for an
+# MPM_FMA=1 kernel would be served to every other caller; never contracted, the weights are
+# the same bits for all of them.
+@njit(cache=True, fastmath=False)
+def first_node(s, cells):
+    """The first of the three nodes of a position s (in cells from the grid's lower end) along
+    one axis of `cells` cells; -1 outside the grid (or NaN)."""
+    if not (s >= 0.5 - TOUCH and s <= cells - 0.5 + TOUCH):
+        return -1
+    return min(max(int(s - 0.5), 0), cells - 2)
+
+
+@njit(cache=True, fastmath=False)
+def weights_1d(f):
+    """The weights on the nodes at -f, 1 - f, 2 - f cells (f in [1/2, 3/2])."""
+    return 0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2
+
+
+@njit(cache=True, fastmath=False)
+def gradients_1d(f, inv_h):
+    """d(weights_1d)/dx on the same nodes."""
+    return -(1.5 - f) * inv_h, -2.0 * (f - 1.0) * inv_h, (f - 0.5) * inv_h
 
 
 @njit(cache=True)
 def axis(s, a, p, cells, inv_h, data, w1, g1):
     """The three nodes of a position s (in cells) along axis a (solver/shape/tensor.py)."""
-    if not (s >= 0.5 - _TOUCH and s <= cells - 0.5 + _TOUCH):   # also catches NaN
+    i = first_node(s, cells)
+    if i < 0:
         return -1
-    i = min(max(int(s - 0.5), 0), cells - 2)
     f = s - i                                     # in [1/2, 3/2]: distance to node i in cells
-    w1[a, 0] = 0.5 * (1.5 - f) ** 2
-    w1[a, 1] = 0.75 - (f - 1.0) ** 2
-    w1[a, 2] = 0.5 * (f - 0.5) ** 2
-    g1[a, 0] = -(1.5 - f) * inv_h
-    g1[a, 1] = -2.0 * (f - 1.0) * inv_h
-    g1[a, 2] = (f - 0.5) * inv_h
+    w1[a, 0], w1[a, 1], w1[a, 2] = weights_1d(f)
+    g1[a, 0], g1[a, 1], g1[a, 2] = gradients_1d(f, inv_h)
     return i
 
 
