@@ -13,9 +13,8 @@ from solver.threads import block_bounds, first_of
 
 
 # The 1D functions: the formula both backends evaluate (this module's kernel, and the fused
-# kernels through solver/fused.py `_axis`); fastmath=False for the reason
-# quadratic_bspline.py gives.
-@njit(cache=True, fastmath=False)
+# kernels through solver/fused.py `_axis`), inlined into both (quadratic_bspline.py says why).
+@njit(inline="always")
 def first_node(s, cells):
     """The first of the two nodes of a position s (in cells from the grid's lower end) along
     one axis of `cells` cells; -1 outside the grid (or NaN)."""
@@ -24,13 +23,13 @@ def first_node(s, cells):
     return min(int(s), cells - 1)
 
 
-@njit(cache=True, fastmath=False)
+@njit(inline="always")
 def weights_1d(f):
     """The weights on the nodes at -f and 1 - f cells (f in [0, 1])."""
     return 1.0 - f, f
 
 
-@njit(cache=True, fastmath=False)
+@njit(inline="always")
 def gradients_1d(inv_h):
     """d(weights_1d)/dx on the same nodes."""
     return -inv_h, inv_h

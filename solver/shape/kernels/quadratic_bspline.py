@@ -18,11 +18,13 @@ TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
 # The 1D functions below are the formula both backends evaluate: this module's `axis` (the
 # general backend, through tensor.py) and the fused kernels (solver/fused.py `_axis`, and the
-# vectorised passes through `weights_1d`). fastmath=False: a callee otherwise inherits its
-# caller's flags but is cached once per signature, so a contracted copy compiled for an
-# MPM_FMA=1 kernel would be served to every other caller; never contracted, the weights are
-# the same bits for all of them.
-@njit(cache=True, fastmath=False)
+# vectorised passes through `weights_1d`). `first_node` and `gradients_1d` are inlined into
+# their callers, which compile them with their own flags: neither caller contracts (`_axis`
+# says fastmath=False), and a function of its own would add a compilation to every cold
+# process. `weights_1d` is also called from contracted kernels, so it is compiled once, with
+# fastmath=False: a callee otherwise inherits its first caller's flags but is cached once per
+# signature, so a contracted copy would be served to every caller after it.
+@njit(inline="always")
 def first_node(s, cells):
     """The first of the three nodes of a position s (in cells from the grid's lower end) along
     one axis of `cells` cells; -1 outside the grid (or NaN)."""
@@ -37,7 +39,7 @@ def weights_1d(f):
     return 0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2
 
 
-@njit(cache=True, fastmath=False)
+@njit(inline="always")
 def gradients_1d(f, inv_h):
     """d(weights_1d)/dx on the same nodes."""
     return -(1.5 - f) * inv_h, -2.0 * (f - 1.0) * inv_h, (f - 0.5) * inv_h
