@@ -112,13 +112,15 @@ def _axis(S, x, lower, inv_h, cells):
     Node i + j lies at (j - f) h from the particle."""
     s = (x - lower) * inv_h
     if S == 2:
-        i = linear.first_node(s, cells)
-        f = s - max(i, 0)
+        ok = linear.inside(s, cells)
+        i = linear.first_node(s, cells) if ok else 0
+        f = s - i
         (w0, w1), (g0, g1) = linear.weights_1d(f), linear.gradients_1d(inv_h)
-        return i >= 0, max(i, 0), f, (w0, w1, 0.0), (g0, g1, 0.0)
-    i = quadratic_bspline.first_node(s, cells)
-    f = s - max(i, 0)
-    return i >= 0, max(i, 0), f, _quadratic(f), quadratic_bspline.gradients_1d(f, inv_h)
+        return ok, i, f, (w0, w1, 0.0), (g0, g1, 0.0)
+    ok = quadratic_bspline.inside(s, cells)
+    i = quadratic_bspline.first_node(s, cells) if ok else 0
+    f = s - i
+    return ok, i, f, _quadratic(f), quadratic_bspline.gradients_1d(f, inv_h)
 
 
 # twin=True: a run on one thread calls the copies' serial twin through them (solver/jit.py).

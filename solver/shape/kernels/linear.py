@@ -15,11 +15,15 @@ from solver.threads import block_bounds, first_of
 # The 1D functions: the formula both backends evaluate (this module's kernel, and the fused
 # kernels through solver/fused.py `_axis`), inlined into both (quadratic_bspline.py says why).
 @njit(inline="always")
+def inside(s, cells):
+    """Whether a position s (in cells from the grid's lower end) has its nodes on an axis of
+    `cells` cells (False for NaN)."""
+    return s >= 0.0 and s <= cells
+
+
+@njit(inline="always")
 def first_node(s, cells):
-    """The first of the two nodes of a position s (in cells from the grid's lower end) along
-    one axis of `cells` cells; -1 outside the grid (or NaN)."""
-    if not (s >= 0.0 and s <= cells):
-        return -1
+    """The first of the two nodes of a position s inside the grid."""
     return min(int(s), cells - 1)
 
 
@@ -58,9 +62,9 @@ def _block(dims, nodes, start, stop, x, lower, inv_h, cells, strides, idx, w, dw
     for p in range(np.uint64(start), np.uint64(stop)):   # unsigned: no wrap-around test (docs/internals.md)
         for a in range(dim):
             s = (x[p, a] - lower[a]) * inv_h[a]
-            i = first_node(s, cells[a])
-            if i < 0:
+            if not inside(s, cells[a]):
                 return np.int64(p)
+            i = first_node(s, cells[a])
             base[a] = i
             w1[a, 0], w1[a, 1] = weights_1d(s - i)
             g1[a, 0], g1[a, 1] = gradients_1d(inv_h[a])

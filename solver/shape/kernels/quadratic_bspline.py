@@ -18,18 +18,22 @@ TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
 # The 1D functions below are the formula both backends evaluate: this module's `axis` (the
 # general backend, through tensor.py) and the fused kernels (solver/fused.py `_axis`, and the
-# vectorised passes through `weights_1d`). `first_node` and `gradients_1d` are inlined into
+# vectorised passes through `weights_1d`). `inside`, `first_node` and `gradients_1d` are inlined into
 # their callers, which compile them with their own flags: neither caller contracts (`_axis`
 # says fastmath=False), and a function of its own would add a compilation to every cold
 # process. `weights_1d` is also called from contracted kernels, so it is compiled once, with
 # fastmath=False: a callee otherwise inherits its first caller's flags but is cached once per
 # signature, so a contracted copy would be served to every caller after it.
 @njit(inline="always")
+def inside(s, cells):
+    """Whether a position s (in cells from the grid's lower end) has its nodes on an axis of
+    `cells` cells (False for NaN)."""
+    return s >= 0.5 - TOUCH and s <= cells - 0.5 + TOUCH
+
+
+@njit(inline="always")
 def first_node(s, cells):
-    """The first of the three nodes of a position s (in cells from the grid's lower end) along
-    one axis of `cells` cells; -1 outside the grid (or NaN)."""
-    if not (s >= 0.5 - TOUCH and s <= cells - 0.5 + TOUCH):
-        return -1
+    """The first of the three nodes of a position s inside the grid."""
     return min(max(int(s - 0.5), 0), cells - 2)
 
 
@@ -48,9 +52,9 @@ def gradients_1d(f, inv_h):
 @njit(cache=True)
 def axis(s, a, p, cells, inv_h, data, w1, g1):
     """The three nodes of a position s (in cells) along axis a (solver/shape/tensor.py)."""
-    i = first_node(s, cells)
-    if i < 0:
+    if not inside(s, cells):
         return -1
+    i = first_node(s, cells)
     f = s - i                                     # in [1/2, 3/2]: distance to node i in cells
     w1[a, 0], w1[a, 1], w1[a, 2] = weights_1d(f)
     g1[a, 0], g1[a, 1], g1[a, 2] = gradients_1d(f, inv_h)
