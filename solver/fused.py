@@ -50,8 +50,8 @@ from solver.jit import njit, prange
 
 from solver import shape
 from solver.shape.kernels import linear, quadratic_bspline
-# the generated kernels' names for the quadratic B-spline's 1D weights and its grid-end allowance
-from solver.shape.kernels.quadratic_bspline import TOUCH as _TOUCH, weights_1d as _quadratic  # noqa: F401
+# the generated kernels' name for the quadratic B-spline's grid-end allowance
+from solver.shape.kernels.quadratic_bspline import TOUCH as _TOUCH  # noqa: F401
 # which scenes the fused kernels run: decided without numba (the run-time estimates read it too)
 from solver.fused_scope import FUSED_SHAPES, supports  # noqa: F401
 from solver.threads import add_copies
@@ -100,6 +100,12 @@ def inverse_d(apic_d: float, inv_h: np.ndarray) -> np.ndarray:
 
 
 # -- weights along one axis ------------------------------------------------------
+
+# The quadratic B-spline's 1D weights (its module's formula) compiled once, never contracted:
+# the contracted kernels call it too, and a callee inherits its first caller's flags but is
+# cached once per signature, so it says its own.
+_quadratic = njit(cache=True, fastmath=False)(quadratic_bspline.weights_1d.py_func)
+
 
 # fastmath=False like the functions it calls (solver/shape/kernels/quadratic_bspline.py says
 # why). (inline="always" would give each kernel its own copy, but made the kernels' compile

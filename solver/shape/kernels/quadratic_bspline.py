@@ -18,12 +18,11 @@ TOUCH = 1e-9   # round-off allowance at h/2 from a grid end (in cells)
 
 # The 1D functions below are the formula both backends evaluate: this module's `axis` (the
 # general backend, through tensor.py) and the fused kernels (solver/fused.py `_axis`, and the
-# vectorised passes through `weights_1d`). `inside`, `first_node` and `gradients_1d` are inlined into
-# their callers, which compile them with their own flags: neither caller contracts (`_axis`
-# says fastmath=False), and a function of its own would add a compilation to every cold
-# process. `weights_1d` is also called from contracted kernels, so it is compiled once, with
-# fastmath=False: a callee otherwise inherits its first caller's flags but is cached once per
-# signature, so a contracted copy would be served to every caller after it.
+# vectorised passes through `weights_1d`). They are inlined into their callers, which compile
+# them with their own flags (neither caller contracts: `_axis` says fastmath=False), and as
+# functions of their own they would add compilations to every cold process and a call to the
+# general kernels' inner loop. The fused kernels, some contracted, call `weights_1d` as
+# solver/fused.py's `_quadratic`: that copy is compiled once with fastmath=False.
 @njit(inline="always")
 def inside(s, cells):
     """Whether a position s (in cells from the grid's lower end) has its nodes on an axis of
@@ -37,7 +36,7 @@ def first_node(s, cells):
     return min(max(int(s - 0.5), 0), cells - 2)
 
 
-@njit(cache=True, fastmath=False)
+@njit(inline="always")
 def weights_1d(f):
     """The weights on the nodes at -f, 1 - f, 2 - f cells (f in [1/2, 3/2])."""
     return 0.5 * (1.5 - f) ** 2, 0.75 - (f - 1.0) ** 2, 0.5 * (f - 0.5) ** 2
