@@ -5,7 +5,8 @@
 Runs the axisymmetric Taylor bar of tests/verification/taylor_bar.py at cells of
 0.4 and 0.2 mm (2 x 2 particles per cell) with linear hat functions and with
 cubic B-splines, with linear hats and no rate term (C = 0, the review authors' own
-input) at 0.4, 0.2 and 0.1 mm, in axisymmetric TLMPM (linear, one particle per cell) at 0.4 and
+input) at 0.4, 0.2 and 0.1 mm, the same onto an anvil with Coulomb friction 0.2 at 0.4,
+0.2 and 0.1 mm and 0.1 and 0.3 at 0.2 mm, in axisymmetric TLMPM (linear, one particle per cell) at 0.4 and
 0.2 mm, and with --3d the 3D quarter bar at 0.8 and 0.3 mm (2 x 2 x 2, ULMPM)
 and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: linear, one particle
 per cell) at cells of 0.508 and 0.254 mm, and prints the "Taylor bar" table of docs/benchmarks.md:
@@ -26,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "verification"))
 
 from mpm_cases import Case  # noqa: E402
-from taylor_bar import EXPERIMENT, L0, R0, REVIEW, error_measure, measure, taylor_scene  # noqa: E402
+from taylor_bar import EXPERIMENT, L0, R0, REVIEW, error_measure, measure, rough_anvil_scene, taylor_scene  # noqa: E402
 
 from solver import run  # noqa: E402
 
@@ -43,6 +44,12 @@ def without_rate_term(cell: float) -> tuple[str, dict, float]:
     label, scene, spacing = ulmpm(2, cell, 2, "linear")
     scene["materials"]["copper"] = {**scene["materials"]["copper"], "C": 0.0}
     return f"{label}, C = 0", scene, spacing
+
+
+def rough_anvil(cell: float, friction: float) -> tuple[str, dict, float]:
+    """Without the rate term, onto an anvil with Coulomb friction (tests/verification/taylor_bar.py)."""
+    return (f"ULMPM axisymmetric, linear, cell {cell * 1e3:g} mm, 2^2 ppc, C = 0, anvil friction {friction:g}",
+            rough_anvil_scene(cell, friction), cell / 2)
 
 
 def tlmpm_axisymmetric(cell: float) -> tuple[str, dict, float]:
@@ -64,6 +71,8 @@ def tlmpm_3d(cell: float) -> tuple[str, dict, float]:
 def main() -> int:
     runs = [ulmpm(2, cell, 2, shape) for shape in ("linear", "cubic_bspline") for cell in (0.4e-3, 0.2e-3)]
     runs += [without_rate_term(cell) for cell in (0.4e-3, 0.2e-3, 0.1e-3)]
+    runs += [rough_anvil(cell, 0.2) for cell in (0.4e-3, 0.2e-3, 0.1e-3)]
+    runs += [rough_anvil(0.2e-3, friction) for friction in (0.1, 0.3)]
     runs += [tlmpm_axisymmetric(0.4e-3), tlmpm_axisymmetric(0.2e-3)]
     if "--3d" in sys.argv:
         runs += [ulmpm(3, 0.8e-3, 2, "linear"), ulmpm(3, 0.3e-3, 2, "linear"),

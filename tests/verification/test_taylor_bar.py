@@ -17,7 +17,7 @@ and a difference of two runs to two.
 import pytest
 
 from mpm_cases import run_scene
-from taylor_bar import END, EXPERIMENT, REVIEW, error_measure, measure, taylor_scene
+from taylor_bar import END, EXPERIMENT, REVIEW, error_measure, measure, rough_anvil_scene, taylor_scene
 
 CELL, PPC = 0.4e-3, 2
 
@@ -112,3 +112,24 @@ def test_without_the_rate_term_the_bar_has_the_experiment_s_length(tmp_path):
     m = measure(case.frame(-1), CELL / PPC)
     assert abs(m["L"] - EXPERIMENT["L"]) / EXPERIMENT["L"] <= 0.02
     assert m["D"] > 1.05 * EXPERIMENT["D"]
+
+
+def check_within_two_percent(tmp_path, cell):
+    case = run_scene(rough_anvil_scene(cell), tmp_path / "rough-anvil")
+    assert case.result.status == "complete"
+    m = measure(case.frame(-1), cell / PPC)
+    deviations = {k: (m[k] - EXPERIMENT[k]) / EXPERIMENT[k] for k in ("L", "D", "W")}
+    assert all(abs(d) <= 0.02 for d in deviations.values()), deviations
+
+
+def test_on_a_rough_anvil_without_the_rate_term_l_d_and_w_are_within_two_percent(tmp_path):
+    """The bar's two misfits have two causes: the rate term lengthens it (above), and the slip
+    wall lets its face spread. With C = 0 and Coulomb friction 0.2 on the anvil, measured at this
+    cell L +1.5 %, D -1.8 %, W -1.0 % (error 0.014; [R] Table 6's best, TLMPM, 0.03)."""
+    check_within_two_percent(tmp_path, CELL)
+
+
+@pytest.mark.slow
+def test_on_a_rough_anvil_the_bar_stays_within_two_percent_at_a_quarter_of_the_cell(tmp_path):
+    # measured at 0.2 / 0.1 mm: L +1.1 / +0.6 %, D -1.4 / -1.7 %, W -0.3 / -0.3 % (61 s at 0.1 mm)
+    check_within_two_percent(tmp_path, CELL / 4)
