@@ -43,8 +43,6 @@ from solver.parallel.slabs import even_cuts  # noqa: E402
 # Network model of the projection: an InfiniBand HDR-class cluster.
 BANDWIDTH = 12.5e9        # bytes/s per process, one direction
 LATENCY = 2e-6            # s per message
-REDUCTIONS_PER_STEP = 4   # allreduce/bcast per step (time step, failures, report decision, migration count)
-EXCHANGES_PER_STEP = 4    # MUSL: sum_ghosts twice, share_nodes twice
 
 
 def block_scene(dim: int, cells: int, length: float = 1.0) -> dict:
