@@ -6,10 +6,11 @@ Runs the axisymmetric Taylor bar of tests/verification/taylor_bar.py at cells of
 0.4 and 0.2 mm (2 x 2 particles per cell) with linear hat functions and with
 cubic B-splines, with linear hats and no rate term (C = 0, the review authors' own
 input) at 0.4, 0.2 and 0.1 mm, the same onto an anvil with Coulomb friction 0.2 at 0.4,
-0.2 and 0.1 mm and 0.1 and 0.3 at 0.2 mm, in axisymmetric TLMPM (linear, one particle per cell) at 0.4 and
-0.2 mm, and with --3d the 3D quarter bar at 0.8 and 0.3 mm (2 x 2 x 2, ULMPM)
-and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: linear, one particle
-per cell) at cells of 0.508 and 0.254 mm, and prints the "Taylor bar" table of docs/benchmarks.md:
+0.2 and 0.1 mm and with 0.1 and 0.3 at 0.2 mm, in axisymmetric TLMPM (linear, one
+particle per cell) at 0.4 and 0.2 mm; with --3d the 3D quarter bar at 0.8 and 0.3 mm
+(2 x 2 x 2, ULMPM), the quarter without the rate term on the rough anvil at 0.8 and 0.4
+mm, and examples/taylor_bar_3d_tlmpm.json (the review's TLMPM: linear, one particle
+per cell) at cells of 0.508 and 0.254 mm. It prints the "Taylor bar" table of docs/benchmarks.md:
 length, impact-face diameter and bulge, the error measure of [R] eq. 6.19, steps,
 particles and wall time, under the experiment and [R] Table 6.
 """
@@ -46,10 +47,11 @@ def without_rate_term(cell: float) -> tuple[str, dict, float]:
     return f"{label}, C = 0", scene, spacing
 
 
-def rough_anvil(cell: float, friction: float) -> tuple[str, dict, float]:
+def rough_anvil(cell: float, friction: float, dim: int = 2) -> tuple[str, dict, float]:
     """Without the rate term, onto an anvil with Coulomb friction (tests/verification/taylor_bar.py)."""
-    return (f"ULMPM axisymmetric, linear, cell {cell * 1e3:g} mm, 2^2 ppc, C = 0, anvil friction {friction:g}",
-            rough_anvil_scene(cell, friction), cell / 2)
+    label = "axisymmetric" if dim == 2 else "3D quarter"
+    return (f"ULMPM {label}, linear, cell {cell * 1e3:g} mm, 2^{dim} ppc, C = 0, anvil friction {friction:g}",
+            rough_anvil_scene(cell, friction, dimension=dim), cell / 2)
 
 
 def tlmpm_axisymmetric(cell: float) -> tuple[str, dict, float]:
@@ -76,6 +78,7 @@ def main() -> int:
     runs += [tlmpm_axisymmetric(0.4e-3), tlmpm_axisymmetric(0.2e-3)]
     if "--3d" in sys.argv:
         runs += [ulmpm(3, 0.8e-3, 2, "linear"), ulmpm(3, 0.3e-3, 2, "linear"),
+                 rough_anvil(0.8e-3, 0.2, 3), rough_anvil(0.4e-3, 0.2, 3),
                  tlmpm_3d(0.508e-3), tlmpm_3d(0.254e-3)]
     print("| | length L (mm) | diameter D (mm) | bulge W (mm) | error eq. 6.19 | steps | particles | wall time (s) |")
     print("|---|---|---|---|---|---|---|---|")

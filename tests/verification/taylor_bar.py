@@ -73,12 +73,13 @@ def taylor_scene(cell: float, ppc: int = 2, dimension: int = 2, end: float = END
 ANVIL_FRICTION = 0.2
 
 
-def rough_anvil_scene(cell: float, friction: float = ANVIL_FRICTION, ppc: int = 2) -> dict:
-    """The axisymmetric bar without the rate term (the review authors' Karamelo input: `C =
-    0#0.013`) onto an anvil with Coulomb friction instead of the slip wall."""
-    scene = taylor_scene(cell, ppc, frames=2)
+def rough_anvil_scene(cell: float, friction: float = ANVIL_FRICTION, ppc: int = 2, dimension: int = 2) -> dict:
+    """The bar without the rate term (the review authors' Karamelo input: `C = 0#0.013`) onto an
+    anvil with Coulomb friction instead of the slip wall (a 3D quarter's symmetry planes stay slip)."""
+    scene = taylor_scene(cell, ppc, dimension, frames=2)
     scene["materials"]["copper"] = {**scene["materials"]["copper"], "C": 0.0}
-    scene["boundary_conditions"] = [{"type": "wall", "face": "y-", "mode": "friction", "friction": friction}]
+    scene["boundary_conditions"] = [{"type": "wall", "face": "y-", "mode": "friction", "friction": friction}] + [
+        condition for condition in scene["boundary_conditions"] if condition["face"] != "y-"]
     return scene
 
 

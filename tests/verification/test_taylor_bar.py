@@ -114,8 +114,8 @@ def test_without_the_rate_term_the_bar_has_the_experiment_s_length(tmp_path):
     assert m["D"] > 1.05 * EXPERIMENT["D"]
 
 
-def check_within_two_percent(tmp_path, cell):
-    case = run_scene(rough_anvil_scene(cell), tmp_path / "rough-anvil")
+def check_within_two_percent(tmp_path, cell, dimension=2):
+    case = run_scene(rough_anvil_scene(cell, dimension=dimension), tmp_path / "rough-anvil")
     assert case.result.status == "complete"
     m = measure(case.frame(-1), cell / PPC)
     deviations = {k: (m[k] - EXPERIMENT[k]) / EXPERIMENT[k] for k in ("L", "D", "W")}
@@ -133,3 +133,9 @@ def test_on_a_rough_anvil_without_the_rate_term_l_d_and_w_are_within_two_percent
 def test_on_a_rough_anvil_the_bar_stays_within_two_percent_at_a_quarter_of_the_cell(tmp_path):
     # measured at 0.2 / 0.1 mm: L +1.1 / +0.6 %, D -1.4 / -1.7 %, W -0.3 / -0.3 % (61 s at 0.1 mm)
     check_within_two_percent(tmp_path, CELL / 4)
+
+
+@pytest.mark.slow
+def test_the_3d_quarter_on_a_rough_anvil_is_within_two_percent(tmp_path):
+    # measured at 0.4 mm (35,687 particles, 21 s): L +1.6 %, D -0.2 %, W +0.6 % (slip anvil: D +8.9 %)
+    check_within_two_percent(tmp_path, CELL, dimension=3)
