@@ -67,9 +67,9 @@ def taylor_scene(cell: float, ppc: int = 2, dimension: int = 2, end: float = END
     }
 
 
-# The experiment's anvil was not lubricated, and its friction was not measured; a Coulomb wall
-# of this coefficient, with the review authors' own input (C = 0), brings L, D and W within 2 %
-# (docs/benchmarks.md, "Taylor bar": 0.1 leaves D 3.8 % wide, 0.3 6.7 % narrow).
+# The experiment's anvil friction was not measured: a Coulomb wall of this coefficient, with the
+# review authors' own input (C = 0), brings L, D and W within 2 % (docs/benchmarks.md, "Taylor
+# bar"); at 0.1 mm, 0.1 leaves D 3.8 % wide and 0.3 6.7 % narrow.
 ANVIL_FRICTION = 0.2
 
 
