@@ -121,7 +121,7 @@ def probe(scene_path: str, steps: int, warmup: int) -> None:
     s = sim.stencil   # None where the fused kernels step (they keep v_pic instead, for MUSL)
     stencil = s.idx.nbytes + s.w.nbytes + s.dw.nbytes if s is not None else sim.rate.nbytes
     g = sim.grid
-    grid = sum(a.nbytes for a in (g.mass, g.momentum, g.force, g.v_old, g.v_new))
+    grid = sum(a.nbytes for a in {id(a): a for a in (g.mass, g.momentum, g.force, g.v_old, g.v_new)}.values())
     messages = len(getattr(d, "_ghosts", [])) + len(getattr(d, "_lent", []))
     mine = {"particles": sim.particles.count, "halo_bytes_per_step": halo, "messages_per_exchange": messages,
             "halo_seconds_per_step": halo_seconds[0] / steps,

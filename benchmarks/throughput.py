@@ -281,7 +281,7 @@ def breakdown(dim: int, cells: int, repeats: int = 5) -> dict:
     phases = {
         "P2G (mass, momentum with APIC, force)": lambda: sim.phases.particles_to_grid(MLS_DT),
         "grid update and boundary conditions": lambda: (kernels.integrate_nodes(
-            sim.spec[0], tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new),
+            sim.spec[0], tiny, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_new),
             sim.phases._constrain(g.v_new)),
         "G2P (v, C, x; L, F, V)": lambda: sim.phases.grid_to_particles(tiny, remap=False, kinematics=True),
         "material (neo-Hookean stress)": lambda: sim.phases.stress(tiny),

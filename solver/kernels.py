@@ -196,25 +196,27 @@ def nodal_velocity(dims, grid_mass, grid_mom, v):
 
 
 @njit(cache=True, inline="always")
-def _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new, node, dim):
+def _integrate_at(dt, grid_mass, grid_mom, force_then_v, mass_cutoff, v_new, node, dim):
     m = grid_mass[node]
     for a in range(dim):
+        f = force_then_v[node, a]
         v = grid_mom[node, a] / m if m > 0.0 else 0.0
-        v_old[node, a] = v
-        v_new[node, a] = v + dt * grid_force[node, a] / m if m > mass_cutoff else v
+        force_then_v[node, a] = v
+        v_new[node, a] = v + dt * f / m if m > mass_cutoff else v
 
 
 @njit(parallel=True, cache=True)
-def integrate_nodes(dims, dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new):
-    """v_I^t = (mv)_I / m_I and v~_I^{t+dt} = v_I^t + dt f_I / m_I.
+def integrate_nodes(dims, dt, grid_mass, grid_mom, force_then_v, mass_cutoff, v_new):
+    """v_I^t = (mv)_I / m_I into the array that held f_I (the grid's v_old but under USF,
+    solver/state.py v_old_in_force), and v~_I^{t+dt} = v_I^t + dt f_I / m_I.
 
     The acceleration f_I / m_I is unbounded on nodes that a particle barely
     touches (review 2.5.3, E24): below `mass_cutoff` it is dropped. This is the
     cut-off of review eq. 2.63 applied to the acceleration rather than the
     velocity, so that a rigid translation stays exact.
     """
-    for node in prange(v_old.shape[0]):
-        _integrate_at(dt, grid_mass, grid_mom, grid_force, mass_cutoff, v_old, v_new, node, len(dims))
+    for node in prange(v_new.shape[0]):
+        _integrate_at(dt, grid_mass, grid_mom, force_then_v, mass_cutoff, v_new, node, len(dims))
 
 
 @njit(cache=True)

@@ -146,7 +146,7 @@ class Grid:
     mass: np.ndarray       # (n_nodes,)
     momentum: np.ndarray   # (n_nodes, dim)
     force: np.ndarray      # (n_nodes, dim)
-    v_old: np.ndarray      # (n_nodes, dim) v_I^t
+    v_old: np.ndarray      # (n_nodes, dim) v_I^t; the force's array but under USF (`nodal_arrays`)
     v_new: np.ndarray      # (n_nodes, dim) v~_I^{t+dt}, then v_I^{t+dt}
     fields: int = 1        # velocity fields (the arrays hold fields * n_nodes entries)
     inv_h: np.ndarray = field(init=False)
@@ -192,21 +192,29 @@ class Stencil:
 
 
 def make_grid(scene) -> Grid:
-    dim = scene.dimension
     cells = np.asarray(scene.grid_shape(), dtype=np.int64)
     fields = scene.grid_fields()
     n_nodes = fields * int(np.prod(cells + 1))
-    return Grid(
-        lower=np.asarray(scene.grid_lower(), dtype=np.float64),
-        h=np.asarray(scene.cell_sizes(), dtype=np.float64),
-        cells=cells,
-        mass=np.zeros(n_nodes),
-        momentum=np.zeros((n_nodes, dim)),
-        force=np.zeros((n_nodes, dim)),
-        v_old=np.zeros((n_nodes, dim)),
-        v_new=np.zeros((n_nodes, dim)),
-        fields=fields,
-    )
+    return Grid(lower=np.asarray(scene.grid_lower(), dtype=np.float64),
+                h=np.asarray(scene.cell_sizes(), dtype=np.float64),
+                cells=cells, fields=fields, **nodal_arrays(scene, n_nodes))
+
+
+def v_old_in_force(scene) -> bool:
+    """Whether v_I^t is kept in the array of the nodal force f_I: the grid update replaces f_I
+    by v_I^t node by node (kernels.integrate_nodes), and nothing reads f_I after the update
+    until the next P2G forms it again. USF forms v_I^t before the forces, for its
+    stress update, so there each has its own array. A node's 3 values in 3D: 23 bytes a
+    particle on MPM3DMP's largest Taylor bar (docs/benchmarks.md, "Memory")."""
+    return scene.method.scheme != "usf"
+
+
+def nodal_arrays(scene, n_nodes: int) -> dict[str, np.ndarray]:
+    """The grid's nodal arrays (zeros), n_nodes of them (every velocity field's)."""
+    dim = scene.dimension
+    force = np.zeros((n_nodes, dim))
+    return dict(mass=np.zeros(n_nodes), momentum=np.zeros((n_nodes, dim)), force=force,
+                v_old=force if v_old_in_force(scene) else np.zeros((n_nodes, dim)), v_new=np.zeros((n_nodes, dim)))
 
 
 def grid_geometry(scene) -> Grid:

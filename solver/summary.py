@@ -22,6 +22,7 @@ from solver.scene import Scene
 from solver.schema import count_up
 from solver.series import MAX_SERIES_POINTS
 from solver.seeding import count_particles
+from solver.state import v_old_in_force
 
 
 class Summary(BaseModel):
@@ -164,15 +165,17 @@ def particle_bytes(scene: Scene) -> int:
 
 
 def node_bytes(scene: Scene, threads: int) -> int:
-    """Bytes per grid node (of one velocity field): mass, momentum, force, v_old and v_new
-    (solver/state.py Grid), the copies of mass, momentum and force each thread beyond the
-    first adds into (solver/threads.py ScatterCopies), the domain's 1-byte mask of active
-    nodes; with contact "friction" each body's field and its presence and normal (1 + dim); a
-    saturated soil's six nodal values (solver/pore_fluid.py PoreFluid.place); a gas's nodal mass and
-    volume where it takes its density from the grid (solver/gas_density.py)."""
+    """Bytes per grid node (of one velocity field): mass, momentum, force, v_old (but where it is
+    kept in the force's array, solver/state.py v_old_in_force) and v_new, the copies of mass,
+    momentum and force each thread beyond the first adds into (solver/threads.py ScatterCopies),
+    the domain's 1-byte mask of active nodes; with contact "friction" each body's field and its
+    presence and normal (1 + dim); a saturated soil's six nodal values (solver/pore_fluid.py
+    PoreFluid.place); a gas's nodal mass and volume where it takes its density from the grid
+    (solver/gas_density.py)."""
     dim = scene.dimension
-    per_field = 8 * (1 + 4 * dim) + 8 * (threads - 1) * (1 + 2 * dim) + (8 * 6 if saturated(scene) else 0) \
-        + (8 * 2 if grid_density(scene) else 0)
+    velocities = 1 if v_old_in_force(scene) else 2
+    per_field = 8 * (1 + (2 + velocities) * dim) + 8 * (threads - 1) * (1 + 2 * dim) \
+        + (8 * 6 if saturated(scene) else 0) + (8 * 2 if grid_density(scene) else 0)
     return scene.grid_fields() * (per_field + (8 * (1 + dim) if scene.contact.fields else 0)) + 1
 
 

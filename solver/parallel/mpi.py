@@ -39,7 +39,7 @@ from solver.parallel.binning import bin_particles, owners
 from solver.parallel.single import PARTICLES_MOVED, SLABS_MOVED, UNCHANGED
 from solver.parallel.slabs import balanced_cuts, even_cuts, layers_of, local_nodes, overlap, owned_nodes, split_axis
 from solver.results import ResultWriter
-from solver.state import Grid, grid_geometry, material_of_body
+from solver.state import Grid, grid_geometry, material_of_body, nodal_arrays
 
 HALO_TAG = 17
 
@@ -103,15 +103,13 @@ class SlabDomain:
         self._local_strides = _strides(counts)
 
     def grid(self, scene) -> Grid:
-        dim = self.dimension
         lower = self.lower.copy()
         lower[self.axis] += self.local[0] * self.h[self.axis]
         cells = self.cells.copy()
         cells[self.axis] = self.local[1] - self.local[0] - 1
         fields = scene.grid_fields()   # contact: a velocity field per body, one after the other
         n = fields * int(np.prod(cells + 1))
-        return Grid(lower=lower, h=self.h.copy(), cells=cells, mass=np.zeros(n), momentum=np.zeros((n, dim)),
-                    force=np.zeros((n, dim)), v_old=np.zeros((n, dim)), v_new=np.zeros((n, dim)), fields=fields)
+        return Grid(lower=lower, h=self.h.copy(), cells=cells, fields=fields, **nodal_arrays(scene, n))
 
     def constraints(self, scene, grid: Grid) -> "_OwnedConstraints":
         return self.owned(Constraints(scene, grid_geometry(scene)), grid)

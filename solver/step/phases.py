@@ -86,7 +86,9 @@ class Phases:
     def _integrate(self, dt: float) -> None:
         """v_I^t and v~_I^{t+dt}, unconstrained, from the nodal sums."""
         sim, g = self.sim, self.sim.grid
-        kernels.integrate_nodes(sim.spec[0], dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_old, g.v_new)
+        kernels.integrate_nodes(sim.spec[0], dt, g.mass, g.momentum, g.force, sim.mass_cutoff, g.v_new)
+        if g.v_old is not g.force:   # (USF's v_I^t has an array of its own: solver/state.py v_old_in_force)
+            np.copyto(g.v_old, g.force)
 
     def current_velocities(self) -> None:
         """v_I^t = (mv)_I / m_I, constrained: USF's velocity for the stress update."""
