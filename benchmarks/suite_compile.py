@@ -8,8 +8,8 @@
 As a pytest plugin (`-p benchmarks.suite_compile`, imported from the repository's root: with
 benchmarks/ itself on the path, benchmarks/service.py would hide the service package from the
 suite's `mpm serve`), each test process appends
-to SUITE_COMPILE_OUT one line per compilation numba made in it (the kernel, the test that
-caused it, its seconds) and one per test (its start and end). numba raises its `numba:compile`
+to SUITE_COMPILE_OUT one line per compilation numba made in it (the kernel, its argument
+types, the test that caused it, its seconds) and one per test (its start and end). numba raises its `numba:compile`
 event only on a cache miss, after the kernel cache's compile lock (solver/kernel_cache.py): a
 process that waits for another's compilation and loads the result counts nothing. The seconds
 are wall time in the worker: under four workers on two cores about twice the CPU time. What
@@ -51,7 +51,8 @@ def pytest_configure(config):
                 return
             function = getattr(ev.data.get("dispatcher"), "py_func", None)
             name = f"{getattr(function, '__module__', '?')}.{getattr(function, '__qualname__', '?')}"
-            _records.append({"test": _running["test"], "kernel": name, "seconds": time.perf_counter() - start})
+            _records.append({"test": _running["test"], "kernel": name, "signature": str(ev.data.get("args")),
+                             "seconds": time.perf_counter() - start})
 
     event.register("numba:compile", _Compilations())
 
@@ -103,6 +104,9 @@ def summarise(path: str, rows: int = 15) -> None:
         walls[r["test"].split("::")[0]] += r["end"] - r["start"]
     print(f"{len(compiled)} compilations, {sum(kinds.values()):.0f} s; {len(tests)} tests, "
           f"{sum(walls.values()):.0f} s of test time over {len({r['worker'] for r in tests})} processes")
+    seen = collections.Counter((r["kernel"], r.get("signature")) for r in compiled)
+    print(f"{sum(n - 1 for n in seen.values())} of them a kernel and signature compiled before in the suite "
+          "(by another worker: each process compiles a signature at most once)")
     _table("kind", kinds, rows)
     _table("test file (compiling)", files, rows)
     _table("module", modules, rows)
