@@ -1,9 +1,9 @@
 """The particle state: every per-particle array is reachable by name and moves together."""
 import numpy as np
 
+from solver import kernels
 from solver.examples import load_example
 from solver.scene_checks import load_scene
-from solver import kernels
 from solver.state import make_grid, make_particles
 from solver.summary import node_bytes
 

@@ -41,9 +41,9 @@ def test_two_disk_memory_and_run_time():
     # 2D, linear elastic, fused backend: per particle, 8-byte values: position 2, velocity 2,
     # F 4, L 4, stress 9, mass, volume, volume0, id 4, MUSL's v_pic 2 = 27; plus the 4-byte body
     # index. Per node: mass 1, momentum, force (which then holds v_old: MUSL), v_new 6, and each
-    # thread beyond the first a copy of mass, momentum and force (5); a 1-byte mask. A frame forms no field here (position
-    # and velocity are the state's arrays); 2 frames' bookkeeping, the energy rows. Then the
-    # process's baseline; the preview of 416 points is less than the arrays.
+    # thread beyond the first a copy of mass, momentum and force (5); a 1-byte mask. A frame forms
+    # no field here (position and velocity are the state's arrays); 2 frames' bookkeeping, the
+    # energy rows. Then the process's baseline; the preview of 416 points is less than the arrays.
     threads = cost.planned_threads(scene, 416)
     held = 416 * (27 * 8 + 4) + 441 * (7 * 8 + (threads - 1) * 5 * 8 + 1)
     parts = memory_estimate(scene, 416, 441)
