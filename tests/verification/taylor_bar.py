@@ -69,7 +69,7 @@ def taylor_scene(cell: float, ppc: int = 2, dimension: int = 2, end: float = END
 
 # The experiment's anvil friction was not measured: a Coulomb wall of this coefficient, with the
 # review authors' own input (C = 0), brings L, D and W within 2 % (docs/benchmarks.md, "Taylor
-# bar"); at 0.1 mm, 0.1 leaves D 3.8 % wide and 0.3 6.7 % narrow.
+# bar"); at 0.2 mm, 0.1 leaves D 3.9 % wide and 0.3 6.1 % narrow (benchmarks/taylor_bar.py).
 ANVIL_FRICTION = 0.2
 
 
