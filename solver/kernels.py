@@ -70,6 +70,13 @@ def flag(value: bool) -> np.ndarray:
     return _FLAGS[int(bool(value))]
 
 
+def rows_equal(a: np.ndarray, value, block: int = 1 << 16) -> bool:
+    """Whether every row of `a` (one a particle) equals `value` (a scalar or one row), compared
+    a block of rows at a time: the comparison's temporaries stay small on a large model."""
+    return all(np.array_equal(a[s:s + block], np.broadcast_to(value, a[s:s + block].shape))
+               for s in range(0, a.shape[0], block))
+
+
 @njit(parallel=True, cache=True)
 def p2g(spec, idx, w, dw, mass, vel, volume, stress, acc, grid_mass, grid_mom, grid_force,
         copies_mass, copies_mom, copies_force):

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from solver import fused, kernels, near_one_log, shape
+from solver.kernels import rows_equal
 from solver.threads import first_of
 from solver.step.phases import Phases
 
@@ -227,12 +228,12 @@ class FusedPhases(Phases):
     def _p2g(self, acc: np.ndarray) -> None:
         sim = self.sim
         p, g, c, bad = sim.particles, sim.grid, sim.copies, self._bad
-        # formed while it is a function of the state (Particles.derived), even when a frame or a
-        # checkpoint has read it since: the bits do not depend on what was read; an initial
-        # stress or one assigned is the state, and is read
-        fold, inline = self.plan.fold, p.derived("stress")
         # (L_p put off is C_p: `_g2p`)
         L = self._affine_matrix if p.pending("L") else p.stored("L")
+        # formed while it is a function of the state (Particles.derived), even when a frame or a
+        # checkpoint has read it since: the bits do not depend on what was read; an initial
+        # stress or one assigned is the state, and is read, unless forming it gives it (`_rests`)
+        fold, inline = self.plan.fold, p.derived("stress") or self._rests(L)
         kernel = self.plan.p2g
         if kernel.startswith("p2g_mls") and _contiguous(p.x, p.v, self._affine_matrix, p.F, L, acc):
             variant = self._p2g_mls_variants[inline, acc.shape[0] == 1]   # (one row: a shared acceleration)
@@ -253,6 +254,19 @@ class FusedPhases(Phases):
         outside = first_of(bad)
         if outside >= 0:
             sim.fail(outside, "position", f"left the grid at {np.array2string(p.x[outside], precision=6)}")
+
+    def _rests(self, L: np.ndarray) -> bool:
+        """Whether P2G may form a stress that is still the state's (set before the first step,
+        not yet `derived`) because forming it gives the same: a zero stress stored, and the
+        material's stress lines giving exactly zero at every particle's state (the model's
+        `stress_free`: a body at rest in its reference configuration). The first step then runs
+        the P2G of every later step, instead of a variant compiled for that one step (3-4 s
+        cold on one thread, more for the parallel form). Asked only while the stress is not
+        derived: at the first step (the update puts the stress off from then on) and after an
+        assignment."""
+        p = self.sim.particles
+        return (self.plan.forms_stress and self._stress_model.stress_free(p.F, L, p.volume, p.volume0)
+                and rows_equal(p.stored("stress"), 0.0))
 
     def _lanes(self) -> tuple[np.ndarray, np.ndarray]:
         """The (threads, n_nodes, 4) rows `p2g_lanes` adds into and the (n_nodes, 4) velocities

@@ -563,6 +563,66 @@ def test_an_initial_stress_is_read_by_the_first_p2g():
     assert not np.array_equal(prestressed.particles.v, free.particles.v)
 
 
+def p2g_variants(sim, steps: int) -> list:
+    """The variant (the kernel's compile-time constants) that each of `steps` steps' P2G ran."""
+    kernels, name, seen = sim.phases._kernels, sim.phases.plan.p2g, []
+
+    class Recording:
+        def __getattr__(self, attr):
+            kernel = getattr(kernels, attr)
+            if attr != name:
+                return kernel
+
+            def recorded(variant, *args):
+                seen.append(variant)
+                return kernel(variant, *args)
+            return recorded
+
+    sim.phases._kernels = Recording()
+    for _ in range(steps):
+        sim.advance(2e-4)
+    return seen
+
+
+@pytest.mark.parametrize("material,method", [(NEO_HOOKEAN, "usl-quadratic-mls"), (FLUID, "musl-quadratic-apic")])
+def test_a_body_at_rest_has_its_stress_formed_from_the_first_p2g(material, method):
+    """Bodies that start in their reference configuration (F = I, V = V0, L = 0) without a stress
+    hold the stress their material's lines give there, zero: the first P2G forms it as every later
+    one does, so a run compiles one P2G variant, not a second for its first step. A stress set
+    before the first step is read by that step (and formed from the next)."""
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"]["m"] = material
+    scene = load_scene({**scene, "method": METHODS[method]})
+    at_rest, prestressed = ExplicitMPM(scene), ExplicitMPM(scene)
+    prestressed.particles.stress[:, 0, 0] = -1e3
+    assert at_rest.phases.forms_stress() and not at_rest.particles.derived("stress")
+    first, *later = p2g_variants(at_rest, 3)
+    assert all(variant is first for variant in later)
+    first, *later = p2g_variants(prestressed, 3)
+    assert all(variant is later[0] for variant in later) and first is not later[0]
+
+
+@pytest.mark.parametrize("material,disturb", [
+    (NEO_HOOKEAN, lambda p: p.F.__setitem__((3, 0, 1), 1e-3)),
+    (FLUID, lambda p: p.L.__setitem__((3, 1, 0), 0.5)),                # (viscous)
+    (LINEAR_FLUID, lambda p: p.volume.__setitem__(3, 1.01 * p.volume[3]))])
+def test_a_material_is_stress_free_where_its_own_stress_pass_gives_zero(material, disturb):
+    """`stress_free` (what lets the first P2G form the stress): true at the bodies' first state,
+    where the material's stress pass gives zero in every entry; false once one particle's state
+    is disturbed, where that pass gives that particle a stress."""
+    scene = copy.deepcopy(SCENE_2D)
+    scene["materials"]["m"] = material
+    sim = ExplicitMPM(load_scene({**scene, "method": METHODS["usl-linear-pic"]}))
+    p, model = sim.particles, sim.phases._stress_model
+    assert model.stress_free(p.F, p.L, p.volume, p.volume0)
+    model.update_stress(p, slice(0, p.count), 2e-4)
+    assert not np.any(p.stress)
+    disturb(p)
+    assert not model.stress_free(p.F, p.L, p.volume, p.volume0)
+    model.update_stress(p, slice(0, p.count), 2e-4)
+    assert np.any(p.stress[3]) and not np.any(np.delete(p.stress, 3, axis=0))
+
+
 @pytest.mark.parametrize("material,dimension,method", [
     (NEO_HOOKEAN, 3, "musl-quadratic-apic"), (FLUID, 2, "usl-quadratic-mls")])
 def test_reading_the_stress_formed_in_p2g_leaves_the_run_s_bits(material, dimension, method, monkeypatch):

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from solver.jit import njit, prange
 
-from solver.kernels import axes, flag
+from solver.kernels import axes, flag, rows_equal
 
 
 @njit(cache=True, inline="always")
@@ -99,6 +99,12 @@ class Fluid:
                 lines.append(f"sig{a}{b} = 2.0 * q1 * ({d} - fl_tr / 3.0) - fl_pressure" if a == b
                              else f"sig{a}{b} = 2.0 * q1 * ({d})")
         return tuple(lines)
+
+    def stress_free(self, F, L, volume, volume0) -> bool:
+        """Whether `stress_lines` give exactly zero at every particle (what P2G reads: F_p, L_p,
+        V_p, V0_p): where V_p = V0_p, (V0 / V)^gamma = 1, so the pressure is zero unless the floor
+        is above it, and L_p = 0, the deviator too."""
+        return self.min_pressure <= 0.0 and np.array_equal(volume, volume0) and rows_equal(L, 0.0)
 
     def stress_parameters(self) -> np.ndarray:
         """q0..q3 of `stress_lines`."""

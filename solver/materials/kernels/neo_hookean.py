@@ -11,7 +11,7 @@ import math
 import numpy as np
 from solver.jit import njit, prange
 
-from solver.kernels import axes, determinant
+from solver.kernels import axes, determinant, rows_equal
 from solver.materials.kernels.elastic import IsotropicElastic
 
 
@@ -66,6 +66,11 @@ class NeoHookean(IsotropicElastic):
                 tail = "- 1.0) + nh_c" if a == b else "- 0.0) + 0.0"
                 lines.append(f"sig{a}{b} = q1 / fj * (({bab}) {tail}")
         return tuple(lines)
+
+    def stress_free(self, F, L, volume, volume0) -> bool:
+        """Whether `stress_lines` give exactly zero at every particle (what P2G reads: F_p, L_p,
+        V_p, V0_p): where F_p = I, J = 1, log J = 0 and F F^T - I = 0, each to the bit."""
+        return rows_equal(F, np.eye(F.shape[1]))
 
     def particle_strain_energy(self, particles, sl: slice) -> np.ndarray:
         out = np.empty(sl.stop - sl.start)
